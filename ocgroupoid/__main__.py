@@ -1,0 +1,5 @@
+"""``python -m ocgroupoid``: the command line."""
+
+from .cli import main
+
+main()

@@ -1,0 +1,141 @@
+"""The ``ocgroupoid`` command line: solve YAML problem files.
+
+Exit codes: 0 solved; 1 the solver failed (the solution file is still written, with
+``success: false`` and IPOPT's status); 2 bad input (the message names the key, the line and
+the fix, never a traceback).
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from contextlib import nullcontext
+from pathlib import Path
+from typing import Any, Optional
+
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from .errors import OcgError
+
+app = typer.Typer(no_args_is_help=True, add_completion=False, pretty_exceptions_enable=False,
+                  help="Optimal control on Lie groups and groupoids: solve YAML problem files.")
+out = Console()
+err = Console(stderr=True)
+
+SET_HELP = "Override any key: KEY=VALUE, the value read as YAML (e.g. horizon.N=128)."
+
+
+def fail(message: str, code: int = 2) -> None:
+    """Print an error (no traceback) and exit."""
+    err.print(f"[bold red]error:[/] {message}", highlight=False, markup=True)
+    raise typer.Exit(code)
+
+
+def summary(sol: Any) -> Table:
+    """The table printed after a solve."""
+    d = sol.diagnostics
+    t = Table(title=f"{sol.problem}  (N={sol.N}, T={sol.T:g}, "
+                    f"{sol.discretization.get('retraction')})", show_header=False)
+    t.add_column(style="bold")
+    t.add_column()
+    t.add_row("status", f"[{'green' if sol.success else 'red'}]{sol.status}[/]")
+    t.add_row("cost", f"{sol.cost:.12g}")
+    t.add_row("iterations", str(sol.iterations))
+    t.add_row("build time", f"{sol.build_seconds * 1e3:.1f} ms")
+    t.add_row("solve time", f"{sol.solve_seconds * 1e3:.1f} ms")
+    t.add_row("EL residual (max over nodes)", f"{d['euler_lagrange_residual_max']:.2e}")
+    t.add_row("distance from manifold",
+              ", ".join(f"{k} {v:.1e}" for k, v in d["manifold_distance"].items()))
+    if d["final_residual"]:
+        t.add_row("final residual", ", ".join(f"{k} {v:.1e}" for k, v in
+                                              d["final_residual"].items()))
+    rep = d.get("replay", {})
+    if rep.get("available"):
+        t.add_row("replay terminal error", ", ".join(f"{k} {v:.2e}" for k, v in
+                                                     rep["terminal_error"].items()))
+    if len(sol.minima) > 1:
+        t.add_row("local minima", ", ".join(f"{m['cost']:.6g} ({m['label']})"
+                                            for m in sol.minima))
+    if sol.hint:
+        t.add_row("hint", sol.hint)
+    return t
+
+
+@app.command()
+def solve(
+    file: Path = typer.Argument(..., help="problem file (YAML)"),
+    set_: list[str] = typer.Option([], "--set", help=SET_HELP),
+    out_path: Optional[Path] = typer.Option(None, "--out", help="write the solution JSON here"),
+    plot_path: Optional[Path] = typer.Option(None, "--plot", help="write a PNG plot here"),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="print only errors"),
+) -> None:
+    """Build, solve and summarise a problem file; optionally write the solution JSON."""
+    from . import config
+    from .solve import compile as compile_problem
+
+    try:
+        cfg = config.load(file, set_)
+        problem = config.build(cfg)
+        f = cfg.file
+        t0 = time.perf_counter()
+        with _status("building the NLP...", quiet):
+            solver = compile_problem(problem, f.horizon.N, f.discretization.retraction,
+                                     f.discretization.rule, f.solver.ipopt)
+        with _status("solving...", quiet) as status:
+            sol = solver.solve(multistart=f.solver.multistart,
+                               continuation=f.solver.continuation or None,
+                               progress=status.update if status is not None else _silent)
+        target = out_path or (Path(f.output.file) if f.output.file else None)
+        if target is not None:
+            sol.to_json(target)
+        picture = plot_path or (Path(f.output.plot) if f.output.plot else None)
+        if picture is not None:
+            from .plotting import plot_solution
+            plot_solution(sol, picture)
+    except OcgError as e:
+        fail(str(e))
+        return
+    if not quiet:
+        out.print(summary(sol))
+        out.print(f"total {time.perf_counter() - t0:.2f} s"
+                  + (f"; solution written to {target}" if target else ""))
+    if not sol.success:
+        err.print(f"[bold red]solver failed:[/] {sol.status}. {sol.hint}")
+        raise typer.Exit(1)
+
+
+@app.command("list")
+def list_models() -> None:
+    """Built-in models and the problem files shipped in problems/."""
+    from .models import MODELS
+
+    t = Table(title="models")
+    t.add_column("model")
+    t.add_column("what it is")
+    for name, spec in sorted(MODELS.items()):
+        t.add_row(name, spec.summary)
+    out.print(t)
+    folder = Path.cwd() / "problems"
+    if folder.is_dir():
+        files = sorted(folder.glob("*.yaml"))
+        out.print("problems/: " + (", ".join(p.name for p in files) if files else "(none)"))
+
+
+def _status(message: str, quiet: bool) -> Any:
+    """A spinner on stderr with a message, or nothing in quiet mode."""
+    return nullcontext() if quiet else err.status(message, spinner="dots")
+
+
+def _silent(_: str) -> None:
+    return None
+
+
+def main() -> None:
+    """Entry point of the ``ocgroupoid`` command."""
+    app()
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

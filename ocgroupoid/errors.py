@@ -1,0 +1,31 @@
+"""One exception hierarchy: every message names the cause and the fix."""
+
+from __future__ import annotations
+
+
+class OcgError(Exception):
+    """Base class of every error ocgroupoid raises on purpose."""
+
+
+class ConfigError(OcgError, ValueError):
+    """A problem file or API argument is malformed (bad key, type, value)."""
+
+
+class DimensionError(OcgError, ValueError):
+    """An array has the wrong shape for the slot it is given to."""
+
+
+class SingularityError(OcgError, ArithmeticError):
+    """A retraction or chart was evaluated at its singularity."""
+
+
+class BoundaryError(OcgError, ValueError):
+    """The boundary conditions are over- or under-determined."""
+
+
+class TranscriptionError(OcgError, RuntimeError):
+    """The NLP could not be assembled from the problem."""
+
+
+class SolverError(OcgError, RuntimeError):
+    """IPOPT did not converge; the message carries its status and a hint."""

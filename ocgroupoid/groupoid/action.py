@@ -1,0 +1,135 @@
+"""The action groupoid S^2 x SO(3) => S^2 of the heavy top (seed 000, §3.1.3, §3.3.5).
+
+SO(3) acts on the sphere from the right by ``Gamma . W = W^T Gamma``; an element
+``(Gamma_k, W_k)`` goes from ``Gamma_k`` to ``W_k^T Gamma_k``, so composable pairs satisfy
+``Gamma_{k+1} = W_k^T Gamma_k``. Its Lie algebroid is ``S^2 x so(3)`` with anchor
+``rho(Gamma, Omega) = Gamma x Omega`` and the bracket of so(3).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from ..errors import ConfigError
+from ..lie import so3
+from ..lie._backend import is_symbolic
+from ..lie.group import Array
+from ..lie.retraction import Retraction
+from ..lie.so3 import SO3
+from .base import Factor
+
+
+def _cross(a: Array, b: Array) -> Array:
+    return ca.cross(a, b) if is_symbolic(a, b) else np.cross(a, b)
+
+
+def _dot(a: Array, b: Array) -> Array:
+    return ca.dot(a, b) if is_symbolic(a, b) else float(np.dot(a, b))
+
+
+def tangent_basis(n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """An orthonormal basis (t1, t2) of the plane orthogonal to the unit vector n."""
+    e = np.eye(3)[int(np.argmin(np.abs(n)))]
+    t1 = np.cross(n, e)
+    t1 /= np.linalg.norm(t1)
+    return t1, np.cross(n, t1)
+
+
+class SphereAction(Factor):
+    """Node states Gamma_k on the unit sphere, velocities Omega_k in so(3), body convention."""
+
+    group = SO3
+    side = "right"
+    state_size = 3
+    state_dim = 2
+    base_size = 3
+    target_size = 9  # Gamma_T and an orthonormal basis (t1, t2) of its tangent plane
+
+    def __init__(self, state: str = "Gamma", velocity: str = "Omega") -> None:
+        self.state, self.velocity = state, velocity
+
+    def step(self, s: Array, ret: Retraction, a: Array) -> Array:
+        return ret.tau(a).T @ s
+
+    def base(self, s: Array) -> Array:
+        return s
+
+    def variation(self, s: Array, eta: Array) -> Array:
+        """``Gamma -> exp(-t hat(eta)) Gamma``: dGamma = Gamma x eta."""
+        return _cross(s, eta)
+
+    def chart(self, s: Array, target: Array) -> Array:
+        """Stereographic coordinates from the antipode of Gamma_T:
+        ``(t_i . Gamma)/(1 + Gamma_T . Gamma)``, i = 1, 2. Two equations, zero only at
+        Gamma_T (the antipode, a root of the bare projection, is a pole here)."""
+        g, t1, t2 = target[0:3], target[3:6], target[6:9]
+        d = 1 + _dot(g, s)
+        return ca.vertcat(_dot(t1, s), _dot(t2, s)) / d if is_symbolic(s, target) else \
+            np.array([_dot(t1, s), _dot(t2, s)]) / d
+
+    def pack_target(self, value: Any) -> np.ndarray:
+        g = self.parse_state(value)
+        t1, t2 = tangent_basis(g)
+        return np.concatenate([g, t1, t2])
+
+    def anchor(self, q: Array, y: Array) -> Array:
+        return _cross(q, y)
+
+    def ad(self, y: Array) -> Array:
+        return so3.hat(y)
+
+    def state_rate(self, s: Array, y: Array) -> Array:
+        return _cross(s, y)
+
+    def parse_state(self, value: Any) -> np.ndarray:
+        v = np.asarray(value, dtype=float).reshape(-1)
+        if v.shape != (3,) or not np.all(np.isfinite(v)):
+            raise ConfigError(f"{self.state} is a unit 3-vector, got {np.asarray(value).tolist()}")
+        n = np.linalg.norm(v)
+        if abs(n - 1.0) > 1e-6:
+            raise ConfigError(
+                f"{self.state} must be a unit vector (|{self.state}| = {n:.6g}); normalise it"
+            )
+        return v / n
+
+    def distance(self, s: np.ndarray) -> float:
+        return abs(float(np.linalg.norm(s)) - 1.0)
+
+    def geodesics(self, s0: np.ndarray, sT: np.ndarray | None, T: float, N: int,
+                  ret: Retraction) -> list[tuple[str, np.ndarray]]:
+        """Great circle from Gamma_0 to Gamma_T, both ways round."""
+        if sT is None:
+            return [("rest", np.zeros((N, 3)))]
+        axis = np.cross(s0, sT)
+        sin, cos = float(np.linalg.norm(axis)), float(np.dot(s0, sT))
+        axis = axis / sin if sin > 1e-12 else tangent_basis(s0)[0]
+        angle = float(np.arctan2(sin, cos))
+        out = []
+        for name, phi in (("great circle", angle), ("great circle, long way", angle - 2 * np.pi)):
+            W = so3.exp(-axis * phi / N)  # W^T rotates Gamma by phi/N about the axis
+            out.append((name, np.tile(ret.tau_inv(W) / (T / N), (N, 1))))
+        return out
+
+    # -- groupoid structure maps --------------------------------------------------------
+
+    def source(self, g: Any) -> np.ndarray:
+        return np.asarray(g[0])
+
+    def target(self, g: Any) -> np.ndarray:
+        return np.asarray(g[1]).T @ np.asarray(g[0])
+
+    def identity(self, x: Any) -> tuple[np.ndarray, np.ndarray]:
+        return (np.asarray(x), np.eye(3))
+
+    def inverse(self, g: Any) -> tuple[np.ndarray, np.ndarray]:
+        return (self.target(g), np.asarray(g[1]).T)
+
+    def multiply(self, g: Any, k: Any) -> tuple[np.ndarray, np.ndarray]:
+        return (np.asarray(g[0]), np.asarray(g[1]) @ np.asarray(k[1]))
+
+    def element(self, s: np.ndarray, w: Any) -> tuple[np.ndarray, np.ndarray]:
+        return (np.asarray(s), np.asarray(w))
+

@@ -1,0 +1,100 @@
+"""The pair groupoid Q x Q => Q on Q = R^n (seed 000, §3.1.1).
+
+An element is a pair (q_k, q_{k+1}); its velocity is the difference quotient
+``xi_k = (q_{k+1} - q_k)/h``, i.e. the step is the translation by ``h xi_k`` of (R^n, +).
+Composable pairs (q_k, q_{k+1}), (q_{k+1}, q_{k+2}) give the three-point stencils of the
+discrete second-order Euler-Lagrange equations (eq. 16).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from ..errors import ConfigError
+from ..lie.group import Array
+from ..lie.retraction import Retraction
+from ..lie.rn import Rn
+from .base import Factor
+
+
+class Pair(Factor):
+    """R^n x R^n => R^n with positions ``state`` and velocities ``velocity``."""
+
+    side = "right"
+    componentwise = True
+
+    def __init__(self, n: int, state: str = "q", velocity: str = "v") -> None:
+        self.group = Rn(n)
+        self.state, self.velocity = state, velocity
+        self.state_size = self.state_dim = self.base_size = self.target_size = n
+
+    def step(self, s: Array, ret: Retraction, a: Array) -> Array:
+        return s + a
+
+    def base(self, s: Array) -> Array:
+        return s
+
+    def variation(self, s: Array, eta: Array) -> Array:
+        return eta
+
+    def chart(self, s: Array, target: Array) -> Array:
+        return s - target
+
+    def pack_target(self, value: Any) -> np.ndarray:
+        return self.parse_state(value)
+
+    def anchor(self, q: Array, y: Array) -> Array:
+        return y
+
+    def ad(self, y: Array) -> Array:
+        return ca.DM.zeros(self.group.dim, self.group.dim)
+
+    def state_rate(self, s: Array, y: Array) -> Array:
+        return y
+
+    def parse_state(self, value: Any) -> np.ndarray:
+        v = np.asarray(value, dtype=float).reshape(-1)
+        if v.shape != (self.group.dim,):
+            raise ConfigError(f"{self.state} needs {self.group.dim} numbers, got {v.size}")
+        return v
+
+    def distance(self, s: np.ndarray) -> float:
+        return 0.0
+
+    def geodesics(self, s0: np.ndarray, sT: np.ndarray | None, T: float, N: int,
+                  ret: Retraction) -> list[tuple[str, np.ndarray]]:
+        """The straight segment (or rest, when the end is free)."""
+        end = s0 if sT is None else sT
+        return [("straight", np.tile((end - s0) / T, (N, 1)))]
+
+    def hermite(self, s0: np.ndarray, v0: np.ndarray, sT: np.ndarray, vT: np.ndarray,
+                T: float, N: int) -> np.ndarray:
+        """Velocities (N x n) of the cubic through (s0, v0) and (sT, vT), as differences."""
+        t = np.linspace(0.0, 1.0, N + 1)[:, None]
+        h00, h10 = 2 * t**3 - 3 * t**2 + 1, t**3 - 2 * t**2 + t
+        h01, h11 = -2 * t**3 + 3 * t**2, t**3 - t**2
+        q = h00 * s0 + h10 * T * v0 + h01 * sT + h11 * T * vT
+        return np.diff(q, axis=0) / (T / N)
+
+    # -- groupoid structure maps --------------------------------------------------------
+
+    def source(self, g: Any) -> np.ndarray:
+        return np.asarray(g[0])
+
+    def target(self, g: Any) -> np.ndarray:
+        return np.asarray(g[1])
+
+    def identity(self, x: Any) -> tuple[np.ndarray, np.ndarray]:
+        return (np.asarray(x), np.asarray(x))
+
+    def inverse(self, g: Any) -> tuple[np.ndarray, np.ndarray]:
+        return (np.asarray(g[1]), np.asarray(g[0]))
+
+    def multiply(self, g: Any, k: Any) -> tuple[np.ndarray, np.ndarray]:
+        return (np.asarray(g[0]), np.asarray(k[1]))
+
+    def element(self, s: np.ndarray, w: Any) -> tuple[np.ndarray, np.ndarray]:
+        return (np.asarray(s), np.asarray(s) + np.asarray(w))

@@ -1,0 +1,112 @@
+"""Products of factor groupoids: G_1 x ... x G_m => Q_1 x ... x Q_m.
+
+The product is itself a groupoid (structure maps act factor by factor); it also lays out
+the concatenated vectors the transcription works with: node states, velocities, base
+coordinates and packed boundary targets, each as consecutive slices per factor.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Sequence
+
+from ..errors import ConfigError
+from .base import Factor
+
+
+@dataclass(frozen=True)
+class Layout:
+    """Start/stop of each factor's block inside a concatenated vector."""
+
+    slices: tuple[slice, ...]
+
+    @property
+    def size(self) -> int:
+        return self.slices[-1].stop if self.slices else 0
+
+    @staticmethod
+    def of(sizes: Sequence[int]) -> "Layout":
+        out, start = [], 0
+        for n in sizes:
+            out.append(slice(start, start + n))
+            start += n
+        return Layout(tuple(out))
+
+
+class Groupoid:
+    """A product of factors; a single factor is a product of one."""
+
+    def __init__(self, *factors: Factor) -> None:
+        if not factors:
+            raise ConfigError("a groupoid needs at least one factor")
+        self.factors: tuple[Factor, ...] = tuple(factors)
+        for attr in ("state", "velocity"):
+            names = [getattr(f, attr) for f in factors]
+            dupes = {n for n in names if names.count(n) > 1}
+            if dupes:
+                raise ConfigError(f"{attr} names must be distinct, repeated: {sorted(dupes)}")
+        overlap = {f.state for f in factors} & {f.velocity for f in factors}
+        if overlap:
+            raise ConfigError(f"names used both for a state and a velocity: {sorted(overlap)}")
+        self.state_layout = Layout.of([f.state_size for f in factors])
+        self.velocity_layout = Layout.of([f.algebra_dim for f in factors])
+        self.base_layout = Layout.of([f.base_size for f in factors])
+        self.target_layout = Layout.of([f.target_size for f in factors])
+
+    @property
+    def state_size(self) -> int:
+        return self.state_layout.size
+
+    @property
+    def algebra_dim(self) -> int:
+        return self.velocity_layout.size
+
+    @property
+    def base_size(self) -> int:
+        return self.base_layout.size
+
+    @property
+    def target_size(self) -> int:
+        return self.target_layout.size
+
+    def by_state(self, name: str) -> tuple[int, Factor]:
+        """Index and factor whose node state is called ``name``."""
+        for i, f in enumerate(self.factors):
+            if f.state == name:
+                return i, f
+        raise ConfigError(f"no state called {name!r}; states are {self.state_names}")
+
+    def by_velocity(self, name: str) -> tuple[int, Factor]:
+        """Index and factor whose velocity is called ``name``."""
+        for i, f in enumerate(self.factors):
+            if f.velocity == name:
+                return i, f
+        raise ConfigError(f"no velocity called {name!r}; velocities are {self.velocity_names}")
+
+    @property
+    def state_names(self) -> list[str]:
+        return [f.state for f in self.factors]
+
+    @property
+    def velocity_names(self) -> list[str]:
+        return [f.velocity for f in self.factors]
+
+    # -- structure maps, factor by factor ---------------------------------------------
+
+    def source(self, g: Sequence[Any]) -> tuple[Any, ...]:
+        return tuple(f.source(x) for f, x in zip(self.factors, g))
+
+    def target(self, g: Sequence[Any]) -> tuple[Any, ...]:
+        return tuple(f.target(x) for f, x in zip(self.factors, g))
+
+    def identity(self, x: Sequence[Any]) -> tuple[Any, ...]:
+        return tuple(f.identity(v) for f, v in zip(self.factors, x))
+
+    def inverse(self, g: Sequence[Any]) -> tuple[Any, ...]:
+        return tuple(f.inverse(x) for f, x in zip(self.factors, g))
+
+    def multiply(self, g: Sequence[Any], k: Sequence[Any]) -> tuple[Any, ...]:
+        return tuple(f.multiply(a, b) for f, a, b in zip(self.factors, g, k))
+
+    def __repr__(self) -> str:
+        return " x ".join(repr(f) for f in self.factors)

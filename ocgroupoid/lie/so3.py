@@ -1,0 +1,290 @@
+"""SO(3): hat, vee, exp, log, Ad, ad, and the rotation constructors used by problem files.
+
+Conventions: ``hat(w) v = w x v``; vectors are CasADi columns or 1-D NumPy arrays; a
+rotation is a 3 x 3 matrix. Formulas with a removable singularity at angle 0 switch to a
+Taylor branch built from a guarded argument, so neither value nor derivative is NaN.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Sequence
+
+import casadi as ca
+import numpy as np
+
+from ..errors import ConfigError, SingularityError
+from ._backend import dual, is_symbolic, safe_if, to_numpy
+from .group import Array, LieGroup
+
+_SMALL = 1e-2  # below this squared angle the Taylor branches are exact to 1e-16
+
+
+@dual
+def hat(w: Array) -> Array:
+    """The skew matrix of w: ``hat(w) v = w x v``."""
+    return ca.vertcat(
+        ca.horzcat(0, -w[2], w[1]),
+        ca.horzcat(w[2], 0, -w[0]),
+        ca.horzcat(-w[1], w[0], 0),
+    )
+
+
+@dual
+def vee(M: Array) -> Array:
+    """Inverse of ``hat`` on skew matrices: (M[2,1], M[0,2], M[1,0])."""
+    return ca.vertcat(M[2, 1], M[0, 2], M[1, 0])
+
+
+@dual
+def vee_skew(M: Array) -> Array:
+    """vee of the skew part: ``vee((M - M^T)/2)``."""
+    return ca.vertcat(M[2, 1] - M[1, 2], M[0, 2] - M[2, 0], M[1, 0] - M[0, 1]) / 2
+
+
+def _exp_coefficients(theta2: Array) -> tuple[Array, Array]:
+    """A = sin(t)/t and B = (1 - cos t)/t^2 at t^2 = theta2, NaN-free at 0."""
+    small = theta2 < _SMALL
+    safe = safe_if(small, 1.0, theta2)
+    t = ca.sqrt(safe)
+    A = safe_if(small, 1 - theta2 / 6 + theta2**2 / 120 - theta2**3 / 5040, ca.sin(t) / t)
+    B = safe_if(
+        small,
+        0.5 - theta2 / 24 + theta2**2 / 720 - theta2**3 / 40320,
+        2 * ca.sin(t / 2) ** 2 / safe,
+    )
+    return A, B
+
+
+def _jacobian_coefficient(theta2: Array) -> Array:
+    """C = (t - sin t)/t^3, NaN-free at 0."""
+    small = theta2 < _SMALL
+    safe = safe_if(small, 1.0, theta2)
+    t = ca.sqrt(safe)
+    return safe_if(
+        small,
+        1 / 6 - theta2 / 120 + theta2**2 / 5040 - theta2**3 / 362880,
+        (t - ca.sin(t)) / (t * safe),
+    )
+
+
+def _jacobian_inverse_coefficient(theta2: Array) -> Array:
+    """D = 1/t^2 - (1 + cos t)/(2 t sin t), NaN-free at 0 (singular at t = 2 pi)."""
+    small = theta2 < _SMALL
+    safe = safe_if(small, 1.0, theta2)
+    t = ca.sqrt(safe)
+    return safe_if(
+        small,
+        1 / 12 + theta2 / 720 + theta2**2 / 30240 + theta2**3 / 1209600,
+        1 / safe - (1 + ca.cos(t)) / (2 * t * ca.sin(t)),
+    )
+
+
+@dual
+def exp(w: Array) -> Array:
+    """Rodrigues: ``exp(hat(w)) = I + A hat(w) + B hat(w)^2``."""
+    W = hat(w)
+    A, B = _exp_coefficients(ca.dot(w, w))
+    return ca.DM.eye(3) + A * W + B * ca.mtimes(W, W)
+
+
+@dual
+def dexp(w: Array) -> Array:
+    """Right-trivialised derivative of exp (the left Jacobian):
+    ``d exp(w)[dw] = hat(dexp(w) dw) exp(w)``, ``dexp = I + B hat(w) + C hat(w)^2``."""
+    W = hat(w)
+    theta2 = ca.dot(w, w)
+    _, B = _exp_coefficients(theta2)
+    C = _jacobian_coefficient(theta2)
+    return ca.DM.eye(3) + B * W + C * ca.mtimes(W, W)
+
+
+@dual
+def dexp_inv(w: Array) -> Array:
+    """Inverse of ``dexp``: ``I - hat(w)/2 + D hat(w)^2``."""
+    W = hat(w)
+    D = _jacobian_inverse_coefficient(ca.dot(w, w))
+    return ca.DM.eye(3) - W / 2 + D * ca.mtimes(W, W)
+
+
+def _log_symbolic(R: Array) -> Array:
+    """log on CasADi graphs: ``theta/sin(theta) * vee_skew(R)``, valid for angle < pi."""
+    s_vec = vee_skew(R)
+    c = (ca.trace(R) - 1) / 2
+    s2 = ca.dot(s_vec, s_vec)
+    small = ca.logic_and(s2 < _SMALL, c > 0)
+    safe = safe_if(small, 1.0, s2)
+    s = ca.sqrt(safe)
+    factor = safe_if(small, 1 + s2 / 6 + 3 * s2**2 / 40 + 5 * s2**3 / 112, ca.atan2(s, c) / s)
+    return factor * s_vec
+
+
+def log(R: Array) -> Array:
+    """The principal logarithm, as a rotation vector of angle in [0, pi].
+
+    NumPy input is handled at every angle, pi included (the axis then comes from the
+    symmetric part). On CasADi graphs the formula is valid for angles below pi.
+    """
+    if is_symbolic(R):
+        return _log_symbolic(R)
+    q = to_quaternion(R)
+    v = q[1:]
+    n = float(np.linalg.norm(v))
+    if n < 1e-300:
+        return np.zeros(3)
+    angle = 2.0 * np.arctan2(n, q[0])
+    return angle * v / n
+
+
+# ------------------------------------------------------------------ unit quaternions
+
+
+@dual
+def quat_multiply(p: Array, q: Array) -> Array:
+    """Hamilton product p q of quaternions (w, x, y, z); R(p q) = R(p) R(q)."""
+    pw, pv, qw, qv = p[0], p[1:4], q[0], q[1:4]
+    return ca.vertcat(pw * qw - ca.dot(pv, qv), pw * qv + qw * pv + ca.cross(pv, qv))
+
+
+@dual
+def quat_to_matrix(q: Array) -> Array:
+    """R(q) = (w^2 - |v|^2) I + 2 v v^T + 2 w hat(v); orthogonal exactly when |q| = 1."""
+    w, v = q[0], q[1:4]
+    return (w**2 - ca.dot(v, v)) * ca.DM.eye(3) + 2 * ca.mtimes(v, v.T) + 2 * w * hat(v)
+
+
+def Ad(R: Array) -> Array:
+    """Adjoint of SO(3) on R^3: ``Ad_R = R``."""
+    return R
+
+
+def ad(w: Array) -> Array:
+    """Adjoint of so(3): ``ad_w = hat(w)`` (the bracket is the cross product)."""
+    return hat(w)
+
+
+# ----------------------------------------------------------------- constructors (NumPy)
+
+
+def to_quaternion(R: Any) -> np.ndarray:
+    """Unit quaternion (w, x, y, z) with w >= 0 of a numeric rotation (Shepperd)."""
+    R = np.asarray(R, dtype=float)
+    tr = np.trace(R)
+    cands = [tr, R[0, 0], R[1, 1], R[2, 2]]
+    i = int(np.argmax(cands))
+    if i == 0:
+        w = 0.5 * np.sqrt(max(1.0 + tr, 0.0))
+        q = np.array([w, (R[2, 1] - R[1, 2]) / (4 * w), (R[0, 2] - R[2, 0]) / (4 * w),
+                      (R[1, 0] - R[0, 1]) / (4 * w)])
+    else:
+        j, k = (i % 3) + 1, ((i + 1) % 3) + 1  # cyclic successors among 1, 2, 3
+        a, b, c = i - 1, j - 1, k - 1
+        x = 0.5 * np.sqrt(max(1.0 + R[a, a] - R[b, b] - R[c, c], 0.0))
+        q = np.zeros(4)
+        q[i] = x
+        q[0] = (R[c, b] - R[b, c]) / (4 * x)
+        q[j] = (R[b, a] + R[a, b]) / (4 * x)
+        q[k] = (R[c, a] + R[a, c]) / (4 * x)
+    q /= np.linalg.norm(q)
+    return -q if q[0] < 0 else q
+
+
+def from_quaternion(q: Sequence[float]) -> np.ndarray:
+    """Rotation of the quaternion (w, x, y, z); normalised, zero rejected."""
+    q = np.asarray(q, dtype=float)
+    if q.shape != (4,) or not np.all(np.isfinite(q)):
+        raise ConfigError(f"a quaternion is 4 finite numbers [w, x, y, z], got {q.tolist()}")
+    n = np.linalg.norm(q)
+    if n < 1e-12:
+        raise ConfigError("the zero quaternion is not a rotation; give [1, 0, 0, 0] for none")
+    w, x, y, z = q / n
+    return np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+    ])
+
+
+def from_rotvec(v: Sequence[float]) -> np.ndarray:
+    """exp(hat(v)) of a rotation vector (axis times angle)."""
+    v = np.asarray(v, dtype=float)
+    if v.shape != (3,) or not np.all(np.isfinite(v)):
+        raise ConfigError(f"a rotation vector is 3 finite numbers, got {np.asarray(v).tolist()}")
+    return np.asarray(exp(v))
+
+
+def from_axis_angle(axis: Sequence[float], angle: float) -> np.ndarray:
+    """Rotation by ``angle`` (radians) about ``axis`` (normalised; zero rejected)."""
+    axis = np.asarray(axis, dtype=float)
+    if axis.shape != (3,) or not np.all(np.isfinite(axis)) or not np.isfinite(angle):
+        raise ConfigError("axis_angle needs a 3-vector axis and a finite angle")
+    n = np.linalg.norm(axis)
+    if n < 1e-12:
+        raise ConfigError("the rotation axis is zero; give a nonzero axis such as [0, 0, 1]")
+    return from_rotvec(axis / n * float(angle))
+
+
+def from_matrix(M: Any, tol: float = 1e-6) -> np.ndarray:
+    """A given 3 x 3 matrix, checked to be a rotation (R^T R = I, det R = +1) to ``tol``."""
+    M = np.asarray(M, dtype=float)
+    if M.shape != (3, 3) or not np.all(np.isfinite(M)):
+        raise ConfigError(f"a rotation matrix is 3 x 3 finite numbers, got shape {M.shape}")
+    err = float(np.linalg.norm(M.T @ M - np.eye(3)))
+    if err > tol or np.linalg.det(M) <= 0:
+        raise ConfigError(
+            f"matrix is not a rotation (|R^T R - I| = {err:.2e}, det = {np.linalg.det(M):.3f});"
+            " give an orthonormal matrix with det +1, or use rotvec/quaternion instead"
+        )
+    u, _, vt = np.linalg.svd(M)
+    return u @ vt  # nearest rotation, exact to machine precision
+
+
+class _SO3(LieGroup):
+    """The rotation group; elements are 3 x 3 matrices, flattened column-major."""
+
+    name = "SO3"
+    dim = 3
+    size = 9
+
+    def identity(self) -> np.ndarray:
+        return np.eye(3)
+
+    def compose(self, a: Array, b: Array) -> Array:
+        return a @ b if not is_symbolic(a, b) else ca.mtimes(a, b)
+
+    def inverse(self, a: Array) -> Array:
+        return a.T
+
+    def exp(self, x: Array) -> Array:
+        return exp(x)
+
+    def log(self, g: Array) -> Array:
+        return log(g)
+
+    def hat(self, x: Array) -> Array:
+        return hat(x)
+
+    def vee(self, X: Array) -> Array:
+        return vee(X)
+
+    def Ad(self, g: Array) -> Array:
+        return Ad(g)
+
+    def ad(self, x: Array) -> Array:
+        return ad(x)
+
+    def flatten(self, g: Array) -> Array:
+        if is_symbolic(g):
+            return ca.reshape(g, 9, 1)
+        return np.asarray(g, dtype=float).reshape(9, order="F")
+
+    def unflatten(self, v: Array) -> Array:
+        if is_symbolic(v):
+            return ca.reshape(v, 3, 3)
+        return np.asarray(v, dtype=float).reshape(3, 3, order="F")
+
+    def distance_from_group(self, g: Array) -> float:
+        g = np.asarray(to_numpy(g), dtype=float)
+        return float(np.linalg.norm(g.T @ g - np.eye(3)))
+
+
+SO3 = _SO3()

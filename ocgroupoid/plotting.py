@@ -1,0 +1,68 @@
+"""Figures of a Solution: velocities, controls, multipliers, and attitudes on the sphere."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .solution import write_atomic
+
+
+def plot_solution(sol: Any, path: str | Path, dpi: int = 110) -> Path:
+    """Write a PNG: one panel per quantity; rotations drawn as body axes on the unit sphere."""
+    import io
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rotations = {k: v for k, v in sol.states.items() if np.ndim(v) == 3}
+    vectors = {k: v for k, v in sol.states.items() if np.ndim(v) == 2}
+    panels: list[tuple[str, np.ndarray, np.ndarray, list[str]]] = []
+    for k, v in vectors.items():
+        panels.append((f"state {k}", sol.t, v, [f"{k}{i + 1}" for i in range(v.shape[1])]))
+    for k, v in sol.velocities.items():
+        panels.append((f"velocity {k}", sol.velocity_t, v,
+                       [f"{k}{i + 1}" for i in range(v.shape[1])]))
+    if sol.controls.size:
+        panels.append(("controls", sol.controls_t, sol.controls, sol.control_names))
+    phi = np.asarray(sol.multipliers.get("Phi", []), dtype=float)
+    if phi.size:
+        names = sol.multipliers.get("names") or [f"lambda{i + 1}" for i in range(phi.shape[1])]
+        panels.append(("multipliers lambda^k", np.asarray(sol.multipliers["t"]), phi,
+                       [f"lambda {n}" for n in names]))
+    n = len(panels) + len(rotations)
+    cols = 2 if n > 1 else 1
+    rows = int(np.ceil(n / cols))
+    fig = plt.figure(figsize=(6 * cols, 3.6 * rows))
+    for i, (title, t, y, labels) in enumerate(panels):
+        ax = fig.add_subplot(rows, cols, i + 1)
+        y = np.atleast_2d(np.asarray(y))
+        for j in range(y.shape[1]):
+            ax.plot(t, y[:, j], label=labels[j] if j < len(labels) else str(j))
+        ax.set_title(title)
+        ax.set_xlabel("t")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, loc="best")
+    for i, (k, R) in enumerate(rotations.items()):
+        ax = fig.add_subplot(rows, cols, len(panels) + i + 1, projection="3d")
+        u, v = np.mgrid[0:2 * np.pi:30j, 0:np.pi:15j]
+        ax.plot_wireframe(np.cos(u) * np.sin(v), np.sin(u) * np.sin(v), np.cos(v),
+                          color="0.85", linewidth=0.4)
+        for axis, color in zip(range(3), ("tab:red", "tab:green", "tab:blue")):
+            tip = R[:, :, axis]
+            ax.plot(tip[:, 0], tip[:, 1], tip[:, 2], color=color, label=f"body axis {axis + 1}")
+            ax.scatter(*tip[-1], color=color, s=12)
+        ax.set_title(f"{k}: body axes on the sphere")
+        ax.set_box_aspect((1, 1, 1))
+        ax.legend(fontsize=7)
+    fig.suptitle(f"{sol.problem}: {sol.status}, cost {sol.cost:.6g} (N={sol.N})")
+    fig.tight_layout()
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=dpi)
+    plt.close(fig)
+    write_atomic(path, buf.getvalue())
+    return Path(path)

@@ -1,0 +1,303 @@
+"""A continuous optimal-control problem on a Lie groupoid: the public modelling API.
+
+A Problem holds no N and no retraction: it is the continuous statement. Symbols for the
+base coordinates q, the velocities y (and, for second-order problems, their rates dy) are
+created from the groupoid; the user writes the Lagrangian, cost and constraints with them::
+
+    G = og.Groupoid(og.LieGroupFactor(state="R", velocity="Omega"))
+    pb = og.Problem(G, name="slew")
+    I = pb.parameter("inertia", 3, [1.0, 2.0, 3.0])
+    Om = pb.velocity("Omega")
+    u = pb.mechanics(0.5 * ca.dot(Om, I * Om), actuated="Omega", input_matrix=ca.diag(I))
+    pb.minimize(0.5 * ca.sumsqr(u))
+    pb.initial(R=np.eye(3), Omega=[0, 0, 0])
+    pb.final(R=og.so3.from_rotvec([0, 0, 1]), Omega=[0, 0, 0])
+    pb.horizon(5.0)
+
+Second-order problems (order 2) minimise ``int Ltilde(q, y, dy) dt`` subject to
+``Phi(q, y, dy) = 0``; first-order problems (order 1) minimise ``int l(q, y) dt`` subject to
+``psi(q, y) = 0``. Boundary values, physical parameters and T are runtime parameters of the
+compiled NLP: changing them never rebuilds it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Callable, Sequence
+
+import casadi as ca
+import numpy as np
+
+from .errors import ConfigError, DimensionError
+from .groupoid.base import Factor
+from .groupoid.product import Groupoid
+from .mechanics import Mechanics, split
+
+Value = Any
+GuessHook = Callable[["Problem", Any], list[tuple[str, np.ndarray]]]
+
+
+@dataclass
+class Parameter:
+    """A named runtime parameter with its default value."""
+
+    name: str
+    symbol: ca.SX
+    value: np.ndarray
+    doc: str = ""
+
+
+@dataclass
+class Boundary:
+    """Prescribed values at one end: ``states[name]``, ``velocities[name]``.
+
+    A value of None leaves the whole quantity free; for vector states and velocities a
+    list may hold None in single components (``[0, 0, None]``).
+    """
+
+    states: dict[str, Any] = field(default_factory=dict)
+    velocities: dict[str, Any] = field(default_factory=dict)
+
+
+def _as_vector(value: Any, n: int, what: str, allow_none: bool) -> list[float | None]:
+    if isinstance(value, np.ndarray):
+        value = value.tolist()
+    if not isinstance(value, (list, tuple)):
+        value = [value] if n == 1 else value
+    if not isinstance(value, (list, tuple)) or len(value) != n:
+        raise DimensionError(f"{what} needs {n} components, got {value!r}")
+    out: list[float | None] = []
+    for v in value:
+        if v is None:
+            if not allow_none:
+                raise ConfigError(f"{what} cannot leave single components free")
+            out.append(None)
+            continue
+        try:
+            x = float(v)
+        except (TypeError, ValueError):
+            raise ConfigError(f"{what} components must be numbers, got {v!r}") from None
+        if not np.isfinite(x):
+            raise ConfigError(f"{what} has a non-finite component {v!r}; give a finite number")
+        out.append(x)
+    return out
+
+
+class Problem:
+    """An optimal-control problem on a product Lie groupoid (see the module docstring)."""
+
+    def __init__(self, groupoid: Groupoid | Factor, name: str = "problem", order: int = 2):
+        if isinstance(groupoid, Factor):
+            groupoid = Groupoid(groupoid)
+        if order not in (1, 2):
+            raise ConfigError(f"order is 1 (first-order cost) or 2 (second-order), got {order}")
+        self.groupoid = groupoid
+        self.name = name
+        self.order = order
+        self.q = ca.SX.sym("q", groupoid.base_size)
+        self.y = ca.SX.sym("y", groupoid.algebra_dim)
+        self.dy = ca.SX.sym("dy", groupoid.algebra_dim)
+        self.params: dict[str, Parameter] = {}
+        self.cost: ca.SX | None = None
+        self.constraints: list[tuple[str, ca.SX]] = []
+        self.controls: list[tuple[str, ca.SX]] = []
+        self.dynamics: Mechanics | None = None
+        self.start = Boundary()
+        self.end = Boundary()
+        self.T: float | None = None
+        self.guess_hook: GuessHook | None = None
+        self.rules: dict[str, Callable[..., ca.SX]] = {}
+
+    # -- symbols -----------------------------------------------------------------------
+
+    def parameter(self, name: str, size: int = 1, value: Sequence[float] | float | None = None,
+                  doc: str = "") -> ca.SX:
+        """Declare a runtime parameter; returns its symbol (a column of length ``size``)."""
+        if name in self.params:
+            raise ConfigError(f"parameter {name!r} declared twice")
+        if value is None:
+            raise ConfigError(f"parameter {name!r} needs a default value")
+        vec = np.asarray(_as_vector(value, size, f"parameter {name}", False), dtype=float)
+        sym = ca.SX.sym(name, size)
+        self.params[name] = Parameter(name, sym, vec, doc)
+        return sym
+
+    @property
+    def P(self) -> ca.SX:
+        """All parameter symbols, stacked in declaration order."""
+        syms = [p.symbol for p in self.params.values()]
+        return ca.vertcat(*syms) if syms else ca.SX.zeros(0, 1)
+
+    def parameter_values(self, overrides: dict[str, Any] | None = None) -> np.ndarray:
+        """Stacked parameter values, defaults overridden by ``overrides``."""
+        overrides = dict(overrides or {})
+        unknown = set(overrides) - set(self.params)
+        if unknown:
+            raise ConfigError(f"unknown parameters {sorted(unknown)}; known: {list(self.params)}")
+        vals = []
+        for p in self.params.values():
+            v = overrides.get(p.name, p.value)
+            vals.append(np.asarray(_as_vector(v, p.symbol.numel(), f"parameter {p.name}", False)))
+        return np.concatenate(vals) if vals else np.zeros(0)
+
+    def state(self, name: str) -> ca.SX:
+        """Base coordinates of the factor whose node state is ``name`` (e.g. Gamma, theta)."""
+        i, f = self.groupoid.by_state(name)
+        if f.base_size == 0:
+            raise ConfigError(
+                f"{name} is a group state over a point: a reduced Lagrangian cannot depend on "
+                "it; use its velocity instead"
+            )
+        return self.q[self.groupoid.base_layout.slices[i]]
+
+    def velocity(self, name: str) -> ca.SX:
+        """The velocity symbol of one factor (e.g. Omega, dtheta)."""
+        i, _ = self.groupoid.by_velocity(name)
+        return self.y[self.groupoid.velocity_layout.slices[i]]
+
+    def acceleration(self, name: str) -> ca.SX:
+        """The rate of a velocity (second-order problems only)."""
+        if self.order != 2:
+            raise ConfigError("accelerations exist in second-order problems only (order=2)")
+        i, _ = self.groupoid.by_velocity(name)
+        return self.dy[self.groupoid.velocity_layout.slices[i]]
+
+    def _indices(self, actuated: str | Sequence[str] | Sequence[int]) -> list[int]:
+        if isinstance(actuated, str):
+            actuated = [actuated]
+        out: list[int] = []
+        for a in actuated:
+            if isinstance(a, str):
+                i, _ = self.groupoid.by_velocity(a)
+                s = self.groupoid.velocity_layout.slices[i]
+                out.extend(range(s.start, s.stop))
+            else:
+                out.append(int(a))
+        return out
+
+    # -- the continuous problem ------------------------------------------------------------
+
+    def mechanics(self, lagrangian: ca.SX, actuated: str | Sequence[str] | Sequence[int],
+                  input_matrix: Any = None, control_names: Sequence[str] | None = None
+                  ) -> ca.SX:
+        """Controlled Euler-Lagrange dynamics of ``lagrangian`` (second-order problems).
+
+        ``actuated`` names velocities (or indices of y) that carry the control force
+        ``F = input_matrix @ u``; the rest become constraints ``Phi^A = 0``. Returns the
+        controls u as expressions of (q, y, dy), ready for :meth:`minimize`.
+        """
+        if self.order != 2:
+            raise ConfigError("mechanics() builds a second-order problem; use order=2")
+        if self.dynamics is not None:
+            raise ConfigError("mechanics() was already called for this problem")
+        mech = split(self.groupoid, lagrangian, self.q, self.y, self.dy,
+                     self._indices(actuated), input_matrix)
+        self.dynamics = mech
+        if mech.phi.numel():
+            self.subject_to(mech.phi, name="Phi")
+        names = list(control_names or [f"u{i + 1}" for i in range(mech.u.numel())])
+        self.report_controls(mech.u, names)
+        return mech.u
+
+    def minimize(self, integrand: ca.SX) -> None:
+        """Set the running cost: ``int integrand dt`` (Ltilde for order 2, l for order 1)."""
+        integrand = ca.SX(integrand)
+        if integrand.shape != (1, 1):
+            raise DimensionError(f"the cost integrand is a scalar, got shape {integrand.shape}")
+        self._check_symbols(integrand, "cost")
+        self.cost = integrand
+
+    def subject_to(self, expr: ca.SX, name: str = "c") -> None:
+        """Add equality constraints ``expr(q, y[, dy]) = 0`` along the trajectory."""
+        expr = ca.vec(ca.SX(expr))
+        self._check_symbols(expr, f"constraint {name}")
+        if any(n == name for n, _ in self.constraints):
+            raise ConfigError(f"constraint name {name!r} used twice")
+        self.constraints.append((name, expr))
+
+    def report_controls(self, expr: ca.SX, names: Sequence[str]) -> None:
+        """Declare which expressions are the controls the Solution reports."""
+        expr = ca.vec(ca.SX(expr))
+        if len(names) != expr.numel():
+            raise DimensionError(f"{expr.numel()} controls but {len(names)} names")
+        self._check_symbols(expr, "controls")
+        self.controls = list(zip(names, ca.vertsplit(expr)))
+
+    def _check_symbols(self, expr: ca.SX, what: str) -> None:
+        allowed = {v.name() for v in ca.symvar(ca.vertcat(self.q, self.y, self.P))}
+        if self.order == 2:
+            allowed |= {v.name() for v in ca.symvar(self.dy)}
+        foreign = [v.name() for v in ca.symvar(expr) if v.name() not in allowed]
+        if foreign:
+            raise ConfigError(
+                f"{what} uses symbols {foreign} that are not this problem's q, y"
+                f"{', dy' if self.order == 2 else ''} or parameters"
+            )
+
+    # -- boundary conditions -------------------------------------------------------------
+
+    def initial(self, **values: Any) -> None:
+        """Prescribe initial states/velocities by name (None = free)."""
+        self._set(self.start, values, "initial")
+
+    def final(self, **values: Any) -> None:
+        """Prescribe final states/velocities by name (None = free)."""
+        self._set(self.end, values, "final")
+
+    def _set(self, where: Boundary, values: dict[str, Any], end: str) -> None:
+        for name, value in values.items():
+            if name in self.groupoid.state_names:
+                where.states[name] = self.check_state(name, value, end)
+            elif name in self.groupoid.velocity_names:
+                if self.order == 1:
+                    raise ConfigError(
+                        f"{end}.{name}: a first-order problem takes no velocity conditions"
+                    )
+                where.velocities[name] = self.check_velocity(name, value, end)
+            else:
+                raise ConfigError(
+                    f"{end}.{name}: unknown; states are {self.groupoid.state_names}, "
+                    f"velocities {self.groupoid.velocity_names}"
+                )
+
+    def check_state(self, name: str, value: Any, end: str) -> Any:
+        """Validate a state value: None, or numeric (componentwise None for R^n)."""
+        _, f = self.groupoid.by_state(name)
+        if value is None:
+            return None
+        if f.componentwise:
+            return _as_vector(value, f.state_size, f"{end}.{name}", True)
+        return f.parse_state(value)
+
+    def check_velocity(self, name: str, value: Any, end: str) -> list[float | None] | None:
+        """Validate a velocity value: None or a vector with optional None components."""
+        _, f = self.groupoid.by_velocity(name)
+        if value is None:
+            return None
+        return _as_vector(value, f.algebra_dim, f"{end}.{name}", True)
+
+    def horizon(self, T: float) -> None:
+        """Set the default final time T (> 0)."""
+        self.T = check_horizon(T)
+
+    def guesses(self, hook: GuessHook) -> None:
+        """Register model-specific initial guesses for multi-start.
+
+        ``hook(problem, transcription)`` returns labelled velocity arrays (N x dim y).
+        """
+        self.guess_hook = hook
+
+    def rule(self, name: str, builder: Callable[..., ca.SX]) -> None:
+        """Register an alternative discretisation of the constraints (see discretize.Node)."""
+        self.rules[name] = builder
+
+
+def check_horizon(T: Any) -> float:
+    """A finite, positive horizon, or a ConfigError saying so."""
+    try:
+        T = float(T)
+    except (TypeError, ValueError):
+        raise ConfigError(f"horizon T must be a number, got {T!r}") from None
+    if not np.isfinite(T) or T <= 0:
+        raise ConfigError(f"horizon T must be finite and > 0, got {T}")
+    return T

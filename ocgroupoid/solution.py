@@ -1,0 +1,151 @@
+"""The Solution of a solve: trajectory, controls, multipliers, stats and diagnostics.
+
+``to_json``/``from_json`` use the format of shared/PROBLEMS.md ("What a solution file
+holds"), extended with the discretisation, the parameters, the multi-start minima and the
+NLP point (so a file is enough to warm-start or to compare with exported C code).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .errors import SolverError
+
+
+def _jsonable(v: Any) -> Any:
+    if isinstance(v, np.ndarray):
+        return _jsonable(v.tolist())
+    if isinstance(v, dict):
+        return {str(k): _jsonable(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [_jsonable(x) for x in v]
+    if isinstance(v, (np.floating, float)):
+        f = float(v)
+        return f if math.isfinite(f) else None
+    if isinstance(v, np.integer):
+        return int(v)
+    if isinstance(v, np.bool_):
+        return bool(v)
+    return v
+
+
+def write_atomic(path: str | Path, data: bytes | str) -> None:
+    """Write a file via a temporary file in the same folder and an atomic rename.
+
+    An interrupted write leaves the previous file untouched, never a half-written one.
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    raw = data.encode() if isinstance(data, str) else data
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(raw)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+@dataclass
+class Solution:
+    """A solved (or failed) instance; arrays are NumPy, one row per time."""
+
+    problem: str
+    success: bool
+    status: str
+    N: int
+    T: float
+    cost: float
+    iterations: int
+    solve_seconds: float
+    build_seconds: float
+    discretization: dict[str, Any]
+    parameters: dict[str, list[float]]
+    t: np.ndarray
+    states: dict[str, np.ndarray]
+    velocity_t: np.ndarray
+    velocities: dict[str, np.ndarray]
+    controls_t: np.ndarray
+    controls: np.ndarray
+    control_names: list[str]
+    multipliers: dict[str, Any]
+    diagnostics: dict[str, Any]
+    minima: list[dict[str, Any]] = field(default_factory=list)
+    hint: str = ""
+    x: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    p: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+    def raise_for_status(self) -> "Solution":
+        """Raise SolverError (with IPOPT's status and the hint) unless solved."""
+        if not self.success:
+            raise SolverError(f"IPOPT: {self.status}. {self.hint}".strip())
+        return self
+
+    def to_dict(self) -> dict[str, Any]:
+        return _jsonable({
+            "problem": self.problem,
+            "success": self.success,
+            "status": self.status,
+            "N": self.N,
+            "T": self.T,
+            "cost": self.cost,
+            "stats": {"iterations": self.iterations, "solve_seconds": self.solve_seconds,
+                      "build_seconds": self.build_seconds},
+            "discretization": self.discretization,
+            "parameters": self.parameters,
+            "controls": {"t": self.controls_t, "u": self.controls, "names": self.control_names},
+            "states": {"t": self.t, **self.states},
+            "velocities": {"t": self.velocity_t, **self.velocities},
+            "multipliers": self.multipliers,
+            "diagnostics": self.diagnostics,
+            "minima": self.minima,
+            "hint": self.hint,
+            "nlp": {"x": self.x, "p": self.p},
+        })
+
+    def to_json(self, path: str | Path | None = None, indent: int | None = 1) -> str:
+        """The solution as JSON text; with ``path``, also written there atomically."""
+        text = json.dumps(self.to_dict(), indent=indent)
+        if path is not None:
+            write_atomic(path, text + "\n")
+        return text
+
+    @staticmethod
+    def from_json(source: str | Path) -> "Solution":
+        """Read a solution from JSON text or from a file path."""
+        text = str(source)
+        if not text.lstrip().startswith("{"):
+            text = Path(source).read_text()
+        d = json.loads(text)
+        states = dict(d["states"])
+        vels = dict(d.get("velocities", {"t": []}))
+        ctrl = d["controls"]
+        arr = lambda v: np.array(v, dtype=float)  # noqa: E731  (None -> nan)
+        return Solution(
+            problem=d["problem"], success=bool(d["success"]), status=d["status"], N=int(d["N"]),
+            T=float(d["T"]), cost=float("nan") if d["cost"] is None else float(d["cost"]),
+            iterations=int(d["stats"]["iterations"]),
+            solve_seconds=float(d["stats"]["solve_seconds"]),
+            build_seconds=float(d["stats"].get("build_seconds", 0.0)),
+            discretization=d.get("discretization", {}), parameters=d.get("parameters", {}),
+            t=arr(states.pop("t")), states={k: np.array(v, dtype=float) for k, v in states.items()},
+            velocity_t=arr(vels.pop("t")),
+            velocities={k: np.array(v, dtype=float) for k, v in vels.items()},
+            controls_t=arr(ctrl["t"]), controls=np.array(ctrl["u"], dtype=float),
+            control_names=list(ctrl.get("names", [])), multipliers=d.get("multipliers", {}),
+            diagnostics=d.get("diagnostics", {}), minima=d.get("minima", []),
+            hint=d.get("hint", ""), x=np.array(d.get("nlp", {}).get("x", []), dtype=float),
+            p=np.array(d.get("nlp", {}).get("p", []), dtype=float),
+        )
