@@ -161,9 +161,12 @@ class Transcription:
         n_free0 = int(sum(m.sum() for m in free_start))
         x_free0 = nx + np.arange(n_free0)
         nx += n_free0
-        x_V0 = nx + np.arange(int((~self.masks.start_velocity).sum()))
+        # end velocities exist in second-order problems only (their ghosts enter the nodes)
+        free_V0 = ~self.masks.start_velocity if self.problem.order == 2 else np.zeros(dg, bool)
+        free_VN = ~self.masks.end_velocity if self.problem.order == 2 else np.zeros(dg, bool)
+        x_V0 = nx + np.arange(int(free_V0.sum()))
         nx += x_V0.size
-        x_VN = nx + np.arange(int((~self.masks.end_velocity).sum()))
+        x_VN = nx + np.arange(int(free_VN.sum()))
         nx += x_VN.size
         self.nx = nx
         npar = self.problem.P.numel()
@@ -186,9 +189,9 @@ class Transcription:
                     k += 1
         self.iw_s = np.hstack([s0[:, None], s_next])
         self.iw_V0 = pw["V0"].copy()
-        self.iw_V0[~self.masks.start_velocity] = x_V0
+        self.iw_V0[free_V0] = x_V0
         self.iw_VN = pw["VN"].copy()
-        self.iw_VN[~self.masks.end_velocity] = x_VN
+        self.iw_VN[free_VN] = x_VN
         self.iw_T, self.iw_P, self.iw_end = pw["T"], pw["P"], pw["end"]
 
     def _columns(self, *parts: np.ndarray, ncols: int) -> np.ndarray:

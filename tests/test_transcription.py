@@ -1,0 +1,45 @@
+"""Structure of the NLP: no idle variables, full-rank constraint Jacobian (LICQ)."""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+import pytest
+
+import ocgroupoid as og
+from ocgroupoid.models.rigid_body import rigid_body
+
+from .test_api_general import minimum_acceleration
+
+
+def rolling() -> og.Problem:
+    G = og.Groupoid(og.Pair(2, "xy", "v"), og.LieGroupFactor(state="R", velocity="w",
+                                                             side="left"))
+    pb = og.Problem(G, name="roll", order=1)
+    v, w = pb.velocity("v"), pb.velocity("w")
+    pb.minimize(0.5 * ca.sumsqr(v))
+    pb.subject_to(w - ca.vertcat(-v[1], v[0], 0), name="roll")
+    pb.report_controls(v, ["vx", "vy"])
+    pb.initial(xy=[0, 0], R=np.eye(3))
+    pb.final(xy=[1.0, 0.5], R=og.so3.from_rotvec([-0.5, 1.0, 0.3]))
+    pb.horizon(1.0)
+    return pb
+
+
+def free_end_velocity() -> og.Problem:
+    return rigid_body(OmegaT=[0.0, None, None])
+
+
+@pytest.mark.parametrize("factory", [rigid_body, free_end_velocity, minimum_acceleration,
+                                     rolling])
+def test_every_variable_is_used_and_licq_holds(factory) -> None:
+    solver = og.compile(factory(), N=12)
+    tr = solver.transcription
+    sol = solver.solve(multistart=factory is rolling, replay=False)
+    assert sol.success, sol.status
+    J = np.array(ca.DM(tr.solver.get_function("nlp_jac_g")(sol.x, sol.p)[1]))
+    H = np.array(ca.DM(tr.solver.get_function("nlp_hess_l")(sol.x, sol.p, 1.0,
+                                                             np.ones(tr.ng))))
+    used = (np.abs(J).sum(axis=0) > 0) | (np.abs(H).sum(axis=0) > 0) | (np.abs(H).sum(axis=1) > 0)
+    assert used.all(), np.flatnonzero(~used)
+    assert np.linalg.matrix_rank(J, tol=1e-9) == tr.ng
