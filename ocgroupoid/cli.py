@@ -22,7 +22,7 @@ from .errors import OcgError
 app = typer.Typer(no_args_is_help=True, add_completion=False, pretty_exceptions_enable=False,
                   help="Optimal control on Lie groups and groupoids: solve YAML problem files.")
 out = Console()
-err = Console(stderr=True)
+err = Console(stderr=True, soft_wrap=True)
 
 SET_HELP = "Override any key: KEY=VALUE, the value read as YAML (e.g. horizon.N=128)."
 
@@ -104,6 +104,67 @@ def solve(
     if not sol.success:
         err.print(f"[bold red]solver failed:[/] {sol.status}. {sol.hint}")
         raise typer.Exit(1)
+
+
+@app.command()
+def check(
+    file: Path = typer.Argument(..., help="problem file (YAML)"),
+    set_: list[str] = typer.Option([], "--set", help=SET_HELP),
+) -> None:
+    """Validate a problem file and print its dimensions and boundary conditions, no solve.
+
+    Exits 2 when the file is invalid or a boundary condition is redundant.
+    """
+    from . import config
+    from .checks import check as run_check
+
+    try:
+        cfg = config.load(file, set_)
+        f = cfg.file
+        report = run_check(config.build(cfg), f.horizon.N, f.discretization.retraction,
+                           f.discretization.rule, f.solver.ipopt)
+    except OcgError as e:
+        fail(str(e))
+        return
+    t = Table(title=f"{cfg.name}: model {f.model}, N={f.horizon.N}, T={f.horizon.T:g}, "
+                    f"{f.discretization.retraction}", show_header=False)
+    t.add_column(style="bold")
+    t.add_column()
+    t.add_row("variables", str(report.variables))
+    t.add_row("constraints", f"{report.total_constraints} (" + ", ".join(
+        f"{k} {v}" for k, v in report.constraints.items() if v) + ")")
+    t.add_row("degrees of freedom", str(report.degrees_of_freedom))
+    t.add_row("prescribed", ", ".join(report.prescribed) or "-")
+    t.add_row("free (natural boundary conditions)", ", ".join(report.free) or "-")
+    t.add_row("redundant", ", ".join(report.redundant) or "none")
+    out.print(t)
+    if report.redundant:
+        fail("redundant constraints (LICQ fails, IPOPT would stall): "
+             + "; ".join(report.redundant) + ". Remove or free the boundary condition named.")
+
+
+@app.command()
+def plot(
+    solution: Path = typer.Argument(..., help="solution JSON written by `solve --out`"),
+    out_path: Path = typer.Option(..., "--out", help="PNG file to write"),
+) -> None:
+    """Plot states, velocities, controls and multipliers; attitudes as body axes on the sphere."""
+    import json
+
+    from .plotting import plot_solution
+    from .solution import Solution
+
+    try:
+        sol = Solution.from_json(solution)
+    except FileNotFoundError:
+        fail(f"{solution}: no such file; give the JSON written by `ocgroupoid solve --out`")
+        return
+    except (json.JSONDecodeError, KeyError, TypeError, ValueError, UnicodeDecodeError) as e:
+        fail(f"{solution}: not a solution file ({type(e).__name__}: {e}); give the JSON "
+             "written by `ocgroupoid solve --out`")
+        return
+    plot_solution(sol, out_path)
+    out.print(f"figure written to {out_path}")
 
 
 @app.command("list")

@@ -29,16 +29,15 @@ from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationEr
 
 from .errors import ConfigError
 from .lie import so3
-from .lie.retraction import RETRACTION_NAMES
 
 # ------------------------------------------------------------------ value types
 
 
 def _number(v: Any, what: str = "value") -> float:
     if isinstance(v, bool) or not isinstance(v, (int, float)):
-        raise ValueError(f"{what} must be a number, got {v!r}")
+        raise ValueError(f"{what} must be a number, got {v!r}; write e.g. 1.0")
     if not np.isfinite(v):
-        raise ValueError(f"{what} must be finite, got {v!r}")
+        raise ValueError(f"{what} must be finite, got {v!r}; write a finite number")
     return float(v)
 
 
@@ -171,8 +170,10 @@ class OutputSection(Strict):
 class ProblemFile(Strict):
     """The top level of a problem file."""
 
-    model: str = Field(description="a registered model (see `ocgroupoid list`)")
+    model: str = Field(description="a built-in model (see `ocgroupoid list`) or custom")
     name: str | None = Field(None, description="problem name (default: the file's stem)")
+    definition: dict[str, Any] | None = Field(
+        None, description="model: custom only — groupoid, Lagrangian, cost, constraints")
     parameters: dict[str, Any] = Field(default_factory=dict, description="model parameters")
     horizon: Horizon
     initial: dict[str, Any] = Field(default_factory=dict, description="initial conditions")
@@ -191,6 +192,7 @@ class Config:
 
     path: Path | None
     file: ProblemFile
+    spec: Any  # the ModelSpec (registered, or built from a custom definition)
     parameters: BaseModel
     initial: BaseModel
     final: BaseModel
@@ -254,11 +256,13 @@ def apply_override(data: dict[str, Any], assignment: str) -> tuple[str, ...]:
     key, _, text = assignment.partition("=")
     path = tuple(p for p in key.strip().split(".") if p)
     if not path:
-        raise ConfigError(f"--set {assignment!r}: empty key")
+        raise ConfigError(f"--set {assignment!r}: empty key; write e.g. horizon.N=128")
     try:
         value = yaml.safe_load(text) if text.strip() else None
     except yaml.YAMLError as err:
-        raise ConfigError(f"--set {key}: the value {text!r} is not valid YAML ({err})") from None
+        raise ConfigError(f"--set {key}: the value {text!r} is not valid YAML "
+                          f"({getattr(err, 'problem', err)}); quote it or fix the brackets"
+                          ) from None
     node = data
     for part in path[:-1]:
         if not isinstance(node.get(part), dict):
@@ -268,22 +272,62 @@ def apply_override(data: dict[str, Any], assignment: str) -> tuple[str, ...]:
     return path
 
 
-def _describe(err: dict[str, Any], prefix: tuple, model_fields: Any) -> str:
-    loc = tuple(str(x) for x in (*prefix, *err["loc"]))
-    key = ".".join(loc)
-    kind = err["type"]
+class Locator:
+    """``file:line`` of a key path, or a note that the value came from --set."""
+
+    def __init__(self, path: str | Path | None, lines: dict[tuple, int],
+                 overridden: set[tuple]) -> None:
+        self.file = str(path) if path is not None else "<problem>"
+        self.lines, self.overridden = lines, overridden
+
+    def __call__(self, *key: Any) -> str:
+        if any(key[: len(o)] == o or o[: len(key)] == key for o in self.overridden):
+            return f"{self.file} (--set {'.'.join(map(str, key))})"
+        for n in range(len(key), 0, -1):
+            line = self.lines.get(tuple(key[:n]))
+            if line:
+                return f"{self.file}:{line}"
+        return self.file
+
+
+def _fix(err: dict[str, Any], key: str, known: list[str] | None) -> str:
+    """A message with the fix for one pydantic error."""
+    kind, value = err["type"], err.get("input")
+    ctx = err.get("ctx") or {}
+    last = key.rsplit(".", 1)[-1]
     if kind == "extra_forbidden":
-        known = list(model_fields or [])
-        close = difflib.get_close_matches(str(err["loc"][-1]), known, 1)
-        hint = f"; did you mean {'.'.join((*loc[:-1], close[0]))!r}?" if close else ""
-        return f"unknown key {key!r}{hint} Known here: {', '.join(known)}"
+        close = difflib.get_close_matches(last, known or [], 1)
+        hint = f" did you mean {close[0]!r}?" if close else ""
+        return (f"unknown key {key!r};{hint} keys allowed here: {', '.join(known or [])}")
     if kind == "missing":
         return f"missing key {key!r}; add it (see problems/ for an example)"
-    msg = err["msg"].removeprefix("Value error, ")
+    if kind in ("int_type", "int_from_float", "int_parsing"):
+        return f"{key} must be an integer (e.g. 64), got {value!r}"
+    if kind in ("greater_than_equal", "greater_than"):
+        bound = ctx.get("ge", ctx.get("gt"))
+        op = ">=" if kind == "greater_than_equal" else ">"
+        return f"{key} must be {op} {bound}, got {value!r}; raise it"
+    if kind == "literal_error":
+        options = [o.strip(" '") for o in str(ctx.get("expected", "")).replace(" or ", ", ")
+                   .split(",")]
+        close = difflib.get_close_matches(str(value), options, 1)
+        hint = f" did you mean {close[0]!r}?" if close else ""
+        return f"{key}: {value!r} is not allowed;{hint} choose one of {', '.join(options)}"
+    if kind in ("dict_type", "model_type", "model_attributes_type"):
+        return f"{key} must be a mapping (key: value), got {value!r}"
+    if kind == "list_type":
+        return f"{key} must be a list, e.g. [1, 2, 3], got {value!r}"
+    if kind in ("string_type",):
+        return f"{key} must be text, got {value!r}; quote it"
+    if kind in ("bool_type", "bool_parsing"):
+        return f"{key} must be true or false, got {value!r}"
+    if kind in ("float_type", "float_parsing", "finite_number"):
+        return f"{key} must be a finite number, got {value!r}"
+    msg = str(err["msg"]).removeprefix("Value error, ")
     return f"{key}: {msg}"
 
 
-def _fields_at(model: type[BaseModel], loc: tuple) -> Any:
+def _fields_at(model: type[BaseModel], loc: tuple) -> list[str] | None:
     """Field names of the (sub)model that owns the last key of ``loc``."""
     current: Any = model
     for part in loc[:-1]:
@@ -297,19 +341,17 @@ def _fields_at(model: type[BaseModel], loc: tuple) -> Any:
     return list(getattr(current, "model_fields", {}) or [])
 
 
-def _validate(model: type[BaseModel], data: Any, prefix: tuple, where: str,
-              lines: dict[tuple, int], overridden: set[tuple]) -> BaseModel:
+def validate(model: type[BaseModel], data: Any, prefix: tuple, locate: Locator) -> Any:
+    """``model.model_validate(data)`` with errors that name the key, the line and the fix."""
     try:
         return model.model_validate(data if data is not None else {})
     except ValidationError as exc:
         messages = []
         for err in exc.errors():
-            path = (*prefix, *err["loc"])
-            line = lines.get(path) or lines.get(path[:-1]) or lines.get(prefix)
-            origin = " (from --set)" if any(path[: len(o)] == o for o in overridden) else ""
-            at = f"{where}:{line}" if line and not origin else where
-            messages.append(f"{at}: {_describe(err, prefix, _fields_at(model, err['loc']))}"
-                            f"{origin}")
+            loc = tuple(x for x in err["loc"] if not str(x).startswith("function-"))
+            path = (*prefix, *loc)
+            key = ".".join(map(str, path))
+            messages.append(f"{locate(*path)}: {_fix(err, key, _fields_at(model, loc))}")
         raise ConfigError("\n".join(messages)) from None
 
 
@@ -319,33 +361,38 @@ def load(path: str | Path | None = None, overrides: list[str] | None = None,
     from .models import MODELS
 
     lines: dict[tuple, int] = {}
-    where = str(path) if path is not None else "<problem>"
     if data is None:
         if path is None:
             raise ConfigError("give a problem file path or data")
         data, lines = read_yaml(path)
     data = dict(data)
     overridden = {apply_override(data, a) for a in overrides or []}
-    top = _validate(ProblemFile, data, (), where, lines, overridden)
-    assert isinstance(top, ProblemFile)
-    if top.model not in MODELS:
-        close = difflib.get_close_matches(top.model, list(MODELS), 1)
-        hint = f"; did you mean {close[0]!r}?" if close else ""
-        line = lines.get(("model",))
-        raise ConfigError(f"{where}{':' + str(line) if line else ''}: unknown model "
-                          f"{top.model!r}{hint} Known models: {', '.join(sorted(MODELS))}")
-    spec = MODELS[top.model]
-    sections = [_validate(schema, data.get(key), (key,), where, lines, overridden)
+    locate = Locator(path, lines, overridden)
+    top = validate(ProblemFile, data, (), locate)
+    if top.model == "custom":
+        from .custom import Definition, spec as custom_spec
+
+        if top.definition is None:
+            raise ConfigError(f"{locate('model')}: model: custom needs a definition section "
+                              "(groupoid, cost, ...); see problems/custom_rigid_body.yaml")
+        spec = custom_spec(validate(Definition, top.definition, ("definition",), locate),
+                           locate)
+    elif top.model in MODELS:
+        if top.definition is not None:
+            raise ConfigError(f"{locate('definition')}: definition is only read for "
+                              f"model: custom; remove it or set model: custom")
+        spec = MODELS[top.model]
+    else:
+        close = difflib.get_close_matches(top.model, [*MODELS, "custom"], 1)
+        hint = f" did you mean {close[0]!r}?" if close else ""
+        raise ConfigError(f"{locate('model')}: unknown model {top.model!r};{hint} "
+                          f"choose one of {', '.join(sorted(MODELS))} or custom")
+    sections = [validate(schema, data.get(key), (key,), locate)
                 for key, schema in (("parameters", spec.parameters), ("initial", spec.initial),
                                     ("final", spec.final))]
-    if top.discretization.retraction not in RETRACTION_NAMES:  # pragma: no cover - Literal
-        raise ConfigError(f"unknown retraction {top.discretization.retraction!r}")
-    return Config(Path(path) if path is not None else None, top, *sections, raw=data)
+    return Config(Path(path) if path is not None else None, top, spec, *sections, raw=data)
 
 
 def build(cfg: Config) -> Any:
     """The Problem a validated Config describes."""
-    from .models import MODELS
-
-    spec = MODELS[cfg.file.model]
-    return spec.build(cfg.parameters, cfg.initial, cfg.final, cfg.file.horizon.T, cfg.name)
+    return cfg.spec.build(cfg.parameters, cfg.initial, cfg.final, cfg.file.horizon.T, cfg.name)

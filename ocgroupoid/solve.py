@@ -27,7 +27,10 @@ Progress = Callable[[str], None]
 
 HINTS = {
     "Infeasible_Problem_Detected": "the constraints and boundary conditions look incompatible: "
-    "check the final values (are they reachable?) and the prescribed components",
+    "check the final values (are they reachable?) and the prescribed components; "
+    "`ocgroupoid check` lists them",
+    "Not_Enough_Degrees_Of_Freedom": "more equality constraints than variables: free a "
+    "boundary value or drop a constraint (`ocgroupoid check` names the redundant ones)",
     "Maximum_Iterations_Exceeded": "try multistart, continuation from a coarser N, a longer "
     "horizon, or a larger solver.max_iter",
     "Invalid_Number_Detected": "a stage evaluated to NaN/Inf: with first_order a step turned "

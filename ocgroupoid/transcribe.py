@@ -260,6 +260,39 @@ class Transcription:
             return self.rows("interval")
         return np.hstack([self.rows("node0"), self.rows("node"), self.rows("nodeN")])
 
+    def row_labels(self) -> list[str]:
+        """A readable name for every constraint row, e.g. ``final R (chart 2)``."""
+        G, labels = self.problem.groupoid, [""] * self.ng
+        comps = [f"{f.state}[{j}]" for f in G.factors for j in range(f.state_size)]
+        names = [n for n, c in self.problem.constraints for _ in range(c.numel())] or ["Phi"]
+        node_of = {"node0": lambda c: 0, "node": lambda c: c + 1,
+                   "nodeN": lambda c: self.N, "interval": lambda c: c}
+        for b in self.blocks:
+            rows = self.rows(b.name)
+            for c in range(b.ncols):
+                for r in range(b.m):
+                    if b.name == "recon":
+                        text = f"reconstruction k={c} {comps[r]}"
+                    elif b.name == "final":
+                        text = self._final_label(r)
+                    else:
+                        name = names[r] if r < len(names) else f"Phi[{r}]"
+                        text = f"{name} at {'node' if b.name != 'interval' else 'interval'} " \
+                               f"{node_of[b.name](c)}"
+                    labels[rows[r, c]] = text
+        return labels
+
+    def _final_label(self, r: int) -> str:
+        G = self.problem.groupoid
+        k = 0
+        for f, mask in zip(G.factors, self.masks.end_state):
+            for j in np.flatnonzero(mask):
+                if k == r:
+                    return f"final.{f.state} " + (f"component {j}" if f.componentwise
+                                                  else f"(chart coordinate {j + 1})")
+                k += 1
+        return f"final condition {r}"
+
     # -- parameters and points ----------------------------------------------------------
 
     def pack(self, params: dict[str, Any] | None = None, initial: dict[str, Any] | None = None,
@@ -350,7 +383,8 @@ class Transcription:
         r = self.solver(x0=x0, p=p, lbg=0, ubg=0)
         seconds = time.perf_counter() - t0
         stats = self.solver.stats()
+        status = str(stats["return_status"])
+        iterations = 0 if status == "Not_Enough_Degrees_Of_Freedom" else int(stats["iter_count"])
         return RawResult(guess.label, np.array(r["x"]).ravel(), p, np.array(r["lam_g"]).ravel(),
-                         float(r["f"]), str(stats["return_status"]), bool(stats["success"]),
-                         int(stats["iter_count"]), seconds)
+                         float(r["f"]), status, bool(stats["success"]), iterations, seconds)
 

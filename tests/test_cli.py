@@ -1,4 +1,4 @@
-"""The command line on the shipped problem files."""
+"""The command line: every shipped problem file checks and solves; exit codes (issue 5)."""
 
 from __future__ import annotations
 
@@ -7,14 +7,44 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 from typer.testing import CliRunner
 
+import ocgroupoid as og
 from ocgroupoid.cli import app
+from ocgroupoid.models.rigid_body import rigid_body
 
 ROOT = Path(__file__).resolve().parent.parent
 SO3 = ROOT / "problems" / "so3_rest_to_rest.yaml"
+PROBLEMS = sorted((ROOT / "problems").glob("*.yaml"))
 runner = CliRunner()
+
+INFEASIBLE = """\
+model: custom
+definition:
+  order: 1
+  groupoid: [{type: pair, dim: 2, state: p, velocity: v}]
+  cost: "0.5 * dot(v, v)"
+  constraints: {on_circle: "dot(p, p) - 1"}     # stay on the unit circle ...
+  controls: {vx: "v[0]", vy: "v[1]"}
+horizon: {T: 1.0, N: 16}
+initial: {p: [1.0, 0.0]}
+final: {p: [2.0, 0.0]}                          # ... and end off it
+"""
+
+
+@pytest.mark.parametrize("problem", PROBLEMS, ids=lambda p: p.stem)
+def test_every_problem_file_checks_and_solves(problem: Path, tmp_path) -> None:
+    r = runner.invoke(app, ["check", str(problem)])
+    assert r.exit_code == 0, r.output
+    assert "degrees of freedom" in r.output and "redundant" in r.output
+    out = tmp_path / "sol.json"
+    r = runner.invoke(app, ["solve", str(problem), "--out", str(out)])
+    assert r.exit_code == 0, r.output
+    sol = json.loads(out.read_text())
+    assert sol["success"] and sol["status"] == "Solve_Succeeded"
+    assert sol["diagnostics"]["euler_lagrange_residual_max"] <= 1e-8
 
 
 def test_python_m_solves_the_canonical_problem(tmp_path) -> None:
@@ -23,7 +53,8 @@ def test_python_m_solves_the_canonical_problem(tmp_path) -> None:
                         "horizon.N=32", "--out", str(out)], capture_output=True, text=True,
                        cwd=tmp_path)
     assert r.returncode == 0, r.stderr
-    for word in ("Solve_Succeeded", "cost", "iterations", "build time", "solve time"):
+    for word in ("Solve_Succeeded", "cost", "iterations", "build time", "solve time",
+                 "EL residual", "replay terminal error"):
         assert word in r.stdout
     sol = json.loads(out.read_text())
     assert sol["success"] and sol["N"] == 32 and sol["T"] == 5.0
@@ -32,34 +63,65 @@ def test_python_m_solves_the_canonical_problem(tmp_path) -> None:
     assert len(sol["controls"]["t"]) == len(sol["controls"]["u"]) == 33
 
 
-def test_set_overrides_nested_keys_and_rotations(tmp_path) -> None:
+def test_resolve_with_changed_inertia_matches_the_api(tmp_path) -> None:
+    costs = {}
+    for label, extra in (("default", []), ("changed", ["--set", "parameters.inertia=[2, 1.5, 0.8]"])):
+        out = tmp_path / f"{label}.json"
+        r = runner.invoke(app, ["solve", str(SO3), "-q", "--set", "horizon.N=24", "--set",
+                                "final.R={rotvec: [0.5, -0.4, 1.0]}", *extra, "--out", str(out)])
+        assert r.exit_code == 0, r.output
+        costs[label] = json.loads(out.read_text())
+    changed = costs["changed"]
+    assert changed["N"] == 24 and changed["parameters"]["inertia"] == [2.0, 1.5, 0.8]
+    target = og.so3.from_rotvec([0.5, -0.4, 1.0])
+    assert np.allclose(changed["states"]["R"][-1], target, atol=1e-9)
+    api = og.solve(rigid_body(inertia=[2.0, 1.5, 0.8], RT=target), N=24, replay=False).cost
+    assert abs(changed["cost"] - api) <= 1e-10 * api
+    assert abs(changed["cost"] - costs["default"]["cost"]) > 1e-3 * changed["cost"]
+
+
+def test_infeasible_problem_exits_1_and_writes_failure(tmp_path) -> None:
+    f = tmp_path / "infeasible.yaml"
+    f.write_text(INFEASIBLE)
     out = tmp_path / "sol.json"
-    r = runner.invoke(app, ["solve", str(SO3), "-q", "--set", "horizon.N=24", "--set",
-                            "final.R={rotvec: [0, 0, 1]}", "--set",
-                            "parameters.inertia=[2, 1.5, 0.8]", "--out", str(out)])
-    assert r.exit_code == 0, r.output
+    r = runner.invoke(app, ["solve", str(f), "--out", str(out)])
+    assert r.exit_code == 1
+    text = " ".join(r.output.split())
+    assert "Infeasible_Problem_Detected" in text and "ocgroupoid check" in text
     sol = json.loads(out.read_text())
-    assert sol["N"] == 24 and sol["parameters"]["inertia"] == [2.0, 1.5, 0.8]
-    assert abs(sol["states"]["R"][-1][0][1] + 0.8414709848) < 1e-6
+    assert sol["success"] is False and sol["status"] == "Infeasible_Problem_Detected"
+    assert sol["hint"]
 
 
-def test_bad_input_exits_2_without_traceback(tmp_path) -> None:
-    r = runner.invoke(app, ["solve", str(SO3), "--set", "horizon.N=1"])
+def test_check_names_a_redundant_boundary_condition(tmp_path) -> None:
+    f = tmp_path / "redundant.yaml"
+    f.write_text(INFEASIBLE.replace('{on_circle: "dot(p, p) - 1"}', '{stopped: "v"}')
+                 .replace("final: {p: [2.0, 0.0]}", "final: {p: [1.0, 0.0]}"))
+    r = runner.invoke(app, ["check", str(f)])
     assert r.exit_code == 2
-    assert "horizon.N" in r.output and "Traceback" not in r.output
+    assert "final.p" in " ".join(r.output.split()) and "redundant" in r.output
 
 
-@pytest.mark.parametrize("content, message", [
-    ("", "empty"),
-    ("model: [unclosed", "invalid YAML"),
-])
-def test_unreadable_files(tmp_path, content: str, message: str) -> None:
-    f = tmp_path / "p.yaml"
-    f.write_text(content)
-    r = runner.invoke(app, ["solve", str(f)])
-    assert r.exit_code == 2 and message in r.output
+def test_plot_writes_a_png(tmp_path) -> None:
+    out = tmp_path / "sol.json"
+    assert runner.invoke(app, ["solve", str(SO3), "-q", "--set", "horizon.N=16", "--out",
+                               str(out)]).exit_code == 0
+    png = tmp_path / "fig.png"
+    r = runner.invoke(app, ["plot", str(out), "--out", str(png)])
+    assert r.exit_code == 0 and png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    r = runner.invoke(app, ["plot", str(tmp_path / "missing.json"), "--out", str(png)])
+    assert r.exit_code == 2 and "no such file" in r.output
+    (tmp_path / "bad.json").write_text("{not json")
+    r = runner.invoke(app, ["plot", str(tmp_path / "bad.json"), "--out", str(png)])
+    assert r.exit_code == 2 and "not a solution file" in r.output
 
 
-def test_list_names_the_models() -> None:
+@pytest.mark.parametrize("command", ["solve", "check", "plot", "list"])
+def test_every_command_has_help(command: str) -> None:
+    r = runner.invoke(app, [command, "--help"])
+    assert r.exit_code == 0 and "Usage" in r.output
+
+
+def test_list_names_the_models_and_problem_files() -> None:
     r = runner.invoke(app, ["list"])
     assert r.exit_code == 0 and "rigid_body" in r.output

@@ -1,0 +1,178 @@
+"""``model: custom`` — a new problem described in the problem file, without Python.
+
+The ``definition`` section lists the factors of the groupoid and writes the reduced Lagrangian,
+the cost and extra constraints as expression strings (see :mod:`ocgroupoid.expressions`)::
+
+    definition:
+      groupoid: [{type: so3, state: R, velocity: Omega}]   # so3 | pair (dim: n) | sphere
+      lagrangian: "0.5*dot(Omega, inertia*Omega)"          # second order: mechanics
+      actuated: [Omega]                                    # velocities carrying controls
+      input_matrix: "diag(inertia)"                        # F = input_matrix u (default I)
+      cost: "0.5*dot(u, u)"                                # u: the controls
+    parameters: {inertia: [1.0, 2.0, 3.0]}                 # names and sizes come from here
+
+Symbols in expressions: the parameters; the base coordinates of pair and sphere factors (by
+their state name); the velocities (by name); their rates ``<velocity>_dot`` (order 2); and,
+with a Lagrangian, the controls ``u`` (and each control by its name). Without a Lagrangian,
+``controls`` maps names to expressions. ``order: 1`` gives a first-order problem
+``min int cost(q, y) dt`` subject to the constraints.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Literal
+
+import casadi as ca
+from pydantic import BaseModel, Field, create_model
+
+from .config import Rotation, Strict, UnitVector3, _vector, check_vector
+from .errors import ConfigError
+from .expressions import CONSTANTS, FUNCTIONS, compile_expression
+from .groupoid import Groupoid, LieGroupFactor, Pair, SphereAction
+from .groupoid.base import Factor
+from .models.registry import ModelSpec
+from .problem import Problem
+
+
+class FactorDefinition(Strict):
+    """One factor of the product groupoid."""
+
+    type: Literal["so3", "pair", "sphere"] = Field(
+        description="so3: SO(3) over a point; pair: pair groupoid of R^dim; sphere: S^2 x SO(3)")
+    state: str = Field(description="name of the node state (boundary-condition key)")
+    velocity: str = Field(description="name of the velocity")
+    dim: int | None = Field(None, ge=1, description="dimension of a pair factor")
+    side: Literal["body", "spatial"] = Field(
+        "body", description="so3 only: body R_{k+1} = R_k w_k or spatial R_{k+1} = w_k R_k")
+
+
+class Definition(Strict):
+    """The ``definition`` section of a custom model."""
+
+    groupoid: list[FactorDefinition] = Field(min_length=1, description="factors of the product")
+    order: Literal[1, 2] = Field(2, description="2: second-order cost; 1: first-order cost")
+    lagrangian: str | None = Field(None, description="reduced Lagrangian l(q, y) (order 2)")
+    actuated: list[str] | None = Field(None, description="velocities that carry controls")
+    input_matrix: str | None = Field(None, description="F = input_matrix @ u (default I)")
+    controls: list[str] | dict[str, str] | None = Field(
+        None, description="control names (with a Lagrangian) or name: expression")
+    cost: str = Field(description="running cost integrand")
+    constraints: dict[str, str] = Field(default_factory=dict,
+                                        description="extra constraints name: expression = 0")
+
+
+def _factor(d: FactorDefinition) -> Factor:
+    if d.type == "so3":
+        return LieGroupFactor(state=d.state, velocity=d.velocity,
+                              side="right" if d.side == "body" else "left")
+    if d.type == "sphere":
+        return SphereAction(state=d.state, velocity=d.velocity)
+    if d.dim is None:
+        raise ConfigError(f"definition.groupoid: the pair factor {d.state!r} needs dim: n")
+    return Pair(d.dim, state=d.state, velocity=d.velocity)
+
+
+def _reserved(name: str, where: str) -> None:
+    if name in FUNCTIONS or name in CONSTANTS or not name.isidentifier() or "__" in name:
+        raise ConfigError(f"{where}: {name!r} cannot be a symbol name (it is a function, a "
+                          "constant or not an identifier); rename it")
+
+
+def spec(definition: Definition, where: Any) -> ModelSpec:
+    """A ModelSpec whose sections and builder follow ``definition``.
+
+    ``where(*path)`` returns the ``file:line`` prefix of a key for error messages.
+    """
+    factors = [_factor(d) for d in definition.groupoid]
+    G = Groupoid(*factors)
+    names = [*G.state_names, *G.velocity_names]
+    for n in names:
+        _reserved(n, where("definition", "groupoid"))
+
+    initial_fields: dict[str, Any] = {}
+    final_fields: dict[str, Any] = {}
+    for f in factors:
+        if isinstance(f, LieGroupFactor):
+            kind: Any = Rotation
+        elif isinstance(f, SphereAction):
+            kind = UnitVector3
+        else:
+            kind = _vector(f.state_size, allow_none=True)
+        initial_fields[f.state] = (kind if not f.componentwise else kind | None,
+                                   Field(... if not f.componentwise else None))
+        final_fields[f.state] = (kind | None, Field(None))
+        if definition.order == 2:
+            vel = _vector(f.algebra_dim, allow_none=True)
+            initial_fields[f.velocity] = (vel | None, Field(None))
+            final_fields[f.velocity] = (vel | None, Field(None))
+    Initial = create_model("Initial", __base__=Strict, **initial_fields)
+    Final = create_model("Final", __base__=Strict, **final_fields)
+
+    def build(params: BaseModel, initial: BaseModel, final: BaseModel, T: float,
+              name: str) -> Problem:
+        return _problem(definition, G, params, initial, final, T, name, where)
+
+    return ModelSpec("custom", "a problem written in the file", _Parameters, Initial, Final,
+                     build)
+
+
+class _Parameters(BaseModel):
+    """Any number of named parameters, each a number or a list of numbers."""
+
+    model_config = {"extra": "allow", "frozen": True}
+
+
+def _values(params: BaseModel, where: Any) -> dict[str, list[float]]:
+    out: dict[str, list[float]] = {}
+    for name, value in (params.model_extra or {}).items():
+        _reserved(name, where("parameters", name))
+        vec = value if isinstance(value, list) else [value]
+        try:
+            out[name] = check_vector(vec, len(vec))
+        except ValueError as err:
+            raise ConfigError(f"{where('parameters', name)}: parameters.{name}: {err}") from None
+    return out
+
+
+def _problem(d: Definition, G: Groupoid, params: BaseModel, initial: BaseModel,
+             final: BaseModel, T: float, name: str, where: Any) -> Problem:
+    pb = Problem(G, name=name, order=d.order)
+    symbols: dict[str, Any] = {}
+    for pname, vec in _values(params, where).items():
+        sym = pb.parameter(pname, len(vec), vec)
+        symbols[pname] = sym if len(vec) > 1 else sym[0]
+    for f in G.factors:
+        if f.base_size:
+            symbols[f.state] = pb.state(f.state)
+        symbols[f.velocity] = pb.velocity(f.velocity)
+        if d.order == 2:
+            symbols[f"{f.velocity}_dot"] = pb.acceleration(f.velocity)
+
+    def expr(text: str, *path: str) -> Any:
+        return compile_expression(text, symbols, f"{where(*path)}: {'.'.join(path)}")
+
+    if d.lagrangian is not None:
+        if d.order != 2:
+            raise ConfigError(f"{where('definition', 'lagrangian')}: a Lagrangian needs order 2")
+        if not d.actuated:
+            raise ConfigError(f"{where('definition', 'lagrangian')}: with a Lagrangian, list "
+                              "the actuated velocities in definition.actuated")
+        B = expr(d.input_matrix, "definition", "input_matrix") if d.input_matrix else None
+        names = d.controls if isinstance(d.controls, list) else None
+        try:
+            u = pb.mechanics(expr(d.lagrangian, "definition", "lagrangian"), d.actuated, B, names)
+        except ConfigError as err:
+            raise ConfigError(f"{where('definition')}: definition: {err}") from None
+        symbols["u"] = u
+        for (cname, _), k in zip(pb.controls, range(u.numel())):
+            symbols[cname] = u[k]
+    elif isinstance(d.controls, dict):
+        exprs = [expr(v, "definition", "controls", k) for k, v in d.controls.items()]
+        pb.report_controls(ca.vertcat(*exprs), list(d.controls))
+    pb.minimize(expr(d.cost, "definition", "cost"))
+    for cname, text in d.constraints.items():
+        pb.subject_to(expr(text, "definition", "constraints", cname), name=cname)
+    pb.initial(**{k: v for k, v in initial.model_dump().items() if v is not None})
+    pb.final(**{k: v for k, v in final.model_dump().items() if v is not None})
+    pb.horizon(T)
+    return pb
