@@ -4,13 +4,15 @@ An NLP built as  f = sum_b sum_c F_b(z_bc)_f,  g = [vec(F_b(z_bc)_g)]_b  with ev
 input ``z_bc = w[idx_b[:, c]]`` gathered from ``w = [x; p]`` has block-sparse derivatives.
 Each stage's gradient, Jacobian and Hessian of the Lagrangian are derived symbolically once
 (SX, a few dozen entries), evaluated with ``Function.map`` over the columns, and scattered into
-the global sparse matrices by a constant 0/1 matrix. Building costs the same for any N, and an
+the global sparse matrices by one gather and a row sum (entries that land on the same position
+add up). The symbolic work is the same for any N (only index bookkeeping grows), and an
 evaluation is one pass over the stages (no colouring sweeps over the whole graph).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Callable
 
 import casadi as ca
 import numpy as np
@@ -47,8 +49,8 @@ def _gather(v: ca.MX, idx: np.ndarray) -> ca.MX:
     return ca.reshape(flat, idx.shape[0], idx.shape[1]) if idx.ndim == 2 else flat
 
 
-def _sum_into(src: ca.MX, target: np.ndarray, n_target: int) -> ca.MX:
-    """``out[t] = sum of src[i] over i with target[i] = t`` as one gather and a row sum.
+def _sum_into(src: ca.MX, source: np.ndarray, target: np.ndarray, n_target: int) -> ca.MX:
+    """``out[t] = sum of src[source[i]] over i with target[i] = t``: one gather, one row sum.
 
     Sources are grouped by target; groups are padded to the largest multiplicity with an
     index pointing at an appended zero.
@@ -58,9 +60,8 @@ def _sum_into(src: ca.MX, target: np.ndarray, n_target: int) -> ca.MX:
     start = np.concatenate([[0], np.cumsum(counts)[:-1]])
     slot = np.arange(target.size) - np.repeat(start, counts)
     G = np.full((n_target, max(int(counts.max(initial=1)), 1)), src.numel())
-    G[target[order], slot] = order
-    padded = ca.vertcat(src, ca.MX(1, 1))
-    return ca.sum2(_gather(padded, G))
+    G[target[order], slot] = source[order]
+    return ca.sum2(_gather(ca.vertcat(src, ca.MX(1, 1)), G))
 
 
 def _sparsity(rows: np.ndarray, cols: np.ndarray, shape: tuple[int, int]
@@ -71,6 +72,39 @@ def _sparsity(rows: np.ndarray, cols: np.ndarray, shape: tuple[int, int]
     urows, ucols = uniq % shape[0], uniq // shape[0]
     colind = np.searchsorted(ucols, np.arange(shape[1] + 1))
     return ca.Sparsity(shape[0], shape[1], colind.tolist(), urows.tolist()), inverse
+
+
+class _Scatter:
+    """Stage outputs (columns of mapped nonzeros) and the global (row, col) of each entry."""
+
+    def __init__(self) -> None:
+        self.values: list[ca.MX] = []
+        self.rows: list[np.ndarray] = []
+        self.cols: list[np.ndarray] = []
+
+    def add(self, values: ca.MX, rows: np.ndarray, cols: np.ndarray) -> None:
+        """``values`` (entries x columns, mapped output) with same-shaped target indices."""
+        self.values.append(ca.vec(values))
+        self.rows.append(rows.reshape(-1, order="F"))  # column-major, as ca.vec
+        self.cols.append(cols.reshape(-1, order="F"))
+
+    def _kept(self, keep: Callable[[np.ndarray, np.ndarray], np.ndarray]
+              ) -> tuple[ca.MX, np.ndarray, np.ndarray, np.ndarray]:
+        rows, cols = np.concatenate(self.rows), np.concatenate(self.cols)
+        mask = keep(rows, cols)
+        return ca.vertcat(*self.values), np.flatnonzero(mask), rows[mask], cols[mask]
+
+    def dense(self, n: int, keep: Callable[[np.ndarray, np.ndarray], np.ndarray]) -> ca.MX:
+        """A dense column of length n (entries summed by row)."""
+        src, source, rows, _ = self._kept(keep)
+        return _sum_into(src, source, rows, n)
+
+    def sparse(self, shape: tuple[int, int],
+               keep: Callable[[np.ndarray, np.ndarray], np.ndarray]) -> ca.MX:
+        """A sparse matrix (entries summed by position)."""
+        src, source, rows, cols = self._kept(keep)
+        sp, inverse = _sparsity(rows, cols, shape)
+        return ca.MX(sp, _sum_into(src, source, inverse, sp.nnz()))
 
 
 class StageDerivatives:
@@ -115,11 +149,8 @@ def assemble(blocks: list[Block], x: ca.MX, p: ca.MX) -> dict[str, ca.Function]:
     ng = offset
     lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", ng)
 
-    f_terms, g_terms, grad_src, jac_src, hess_src = [], [], [], [], []
-    grad_t: list[tuple[np.ndarray, np.ndarray]] = []
-    jac_t: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
-    hess_t: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
-    n_grad = n_jac = n_hess = 0
+    f_terms, g_terms = [], []
+    grad, jac, hess = _Scatter(), _Scatter(), _Scatter()
     for b in blocks:
         d = StageDerivatives(b)
         Z = _gather(w, b.idx)
@@ -127,47 +158,18 @@ def assemble(blocks: list[Block], x: ca.MX, p: ca.MX) -> dict[str, ca.Function]:
         f_terms.append(ca.sum2(F))
         g_terms.append(ca.vec(G))
         LAM = ca.reshape(lam_g[b.g_offset:b.g_offset + b.m * b.ncols], b.m, b.ncols)
-        grad_src.append(ca.vec(d.grad.map(b.ncols)(Z)))
-        jac_src.append(ca.vec(d.jac.map(b.ncols)(Z)))
-        hess_src.append(ca.vec(d.hess.map(b.ncols)(Z, lam_f, LAM)))
-        cols = np.arange(b.ncols)
-        # gradient: source (c, j) -> x index idx[j, c]
-        gi = b.idx[: b.n_var].T.reshape(-1)
-        grad_t.append((gi, n_grad + np.arange(gi.size)))
-        n_grad += gi.size
-        # Jacobian: source (c, e) -> (g_offset + c m + row_e, idx[col_e, c])
-        ne = d.jac_rows.size
-        jr = (b.g_offset + cols[:, None] * b.m + d.jac_rows[None, :]).reshape(-1)
-        jc = b.idx[d.jac_cols, :].T.reshape(-1)
-        jac_t.append((jr, jc, n_jac + np.arange(jr.size)))
-        n_jac += ne * b.ncols
-        # Hessian: source (c, e) -> (idx[row_e, c], idx[col_e, c]), upper triangle kept
-        ne = d.hess_rows.size
-        hr = b.idx[d.hess_rows, :].T.reshape(-1)
-        hc = b.idx[d.hess_cols, :].T.reshape(-1)
-        hess_t.append((hr, hc, n_hess + np.arange(hr.size)))
-        n_hess += ne * b.ncols
-
-    def scatter(src: list[ca.MX], t: list, n_src: int, shape: tuple[int, int], triu: bool
-                ) -> ca.MX:
-        rows = np.concatenate([a[0] for a in t])
-        cols = np.concatenate([a[1] for a in t])
-        srcs = np.concatenate([a[2] for a in t])
-        keep = (rows < shape[0]) & (cols < nx)
-        if triu:
-            keep &= rows <= cols
-        sp, inverse = _sparsity(rows[keep], cols[keep], shape)
-        values = _gather(ca.vertcat(*src), srcs[keep])
-        return ca.MX(sp, _sum_into(values, inverse, sp.nnz()))
-
-    grad_rows = np.concatenate([a[0] for a in grad_t])
-    grad_srcs = np.concatenate([a[1] for a in grad_t])
-    keep = grad_rows < nx
+        var = b.idx[: b.n_var]  # (stage entry, column) -> index into w
+        grad.add(d.grad.map(b.ncols)(Z), var, np.zeros_like(var))
+        # Jacobian entry e of column c sits at row g_offset + c m + row_e, column idx[col_e, c]
+        jac.add(d.jac.map(b.ncols)(Z),
+                b.g_offset + np.arange(b.ncols)[None, :] * b.m + d.jac_rows[:, None],
+                var[d.jac_cols, :])
+        hess.add(d.hess.map(b.ncols)(Z, lam_f, LAM), var[d.hess_rows, :], var[d.hess_cols, :])
     f = sum(f_terms[1:], f_terms[0])
     g = ca.vertcat(*g_terms)
-    grad_f = _sum_into(_gather(ca.vertcat(*grad_src), grad_srcs[keep]), grad_rows[keep], nx)
-    jac_g = scatter(jac_src, jac_t, n_jac, (ng, nx), triu=False)
-    hess = scatter(hess_src, hess_t, n_hess, (nx, nx), triu=True)
+    grad_f = grad.dense(nx, lambda r, c: r < nx)
+    jac_g = jac.sparse((ng, nx), lambda r, c: c < nx)
+    hess_l = hess.sparse((nx, nx), lambda r, c: (r < nx) & (c < nx) & (r <= c))
     return {
         "f": f,
         "g": g,
@@ -175,6 +177,6 @@ def assemble(blocks: list[Block], x: ca.MX, p: ca.MX) -> dict[str, ca.Function]:
                                   ["f", "grad_f_x"]),
         "nlp_jac_g": ca.Function("nlp_jac_g", [x, p], [g, jac_g], ["x", "p"],
                                  ["g", "jac_g_x"]),
-        "nlp_hess_l": ca.Function("nlp_hess_l", [x, p, lam_f, lam_g], [hess],
+        "nlp_hess_l": ca.Function("nlp_hess_l", [x, p, lam_f, lam_g], [hess_l],
                                   ["x", "p", "lam_f", "lam_g"], ["triu_hess_gamma_x_x"]),
     }
