@@ -2,10 +2,12 @@
 
 Reports the NLP's size (variables, constraints, degrees of freedom), which boundary values
 are prescribed and which are left free (natural boundary conditions), and tests the
-constraints for redundancy: the Jacobian of all constraints is evaluated at the initial guess
-on a small grid; each vector of its left null space is a dependency among constraint rows,
-reported by the boundary conditions it involves (a redundant boundary condition makes LICQ
-fail and IPOPT stall).
+constraints for redundancy: the Jacobian of all constraints is evaluated at a generic point
+on a small grid (the geodesic guess plus a deterministic perturbation: a constant-velocity
+path itself can be a singular point of the end-point map, e.g. for the rolling ball on a
+fixed plate, where no boundary condition is redundant); each vector of its left null space
+is a dependency among constraint rows, reported by the boundary conditions it involves (a
+redundant boundary condition makes LICQ fail and IPOPT stall).
 """
 
 from __future__ import annotations
@@ -18,7 +20,7 @@ import numpy as np
 
 from .discretize import Discretization
 from .problem import Problem
-from .solve import geodesic_guesses
+from .solve import geodesic_guesses, perturbed_guesses
 from .transcribe import Transcription
 
 SMALL_N = 8
@@ -61,13 +63,13 @@ def boundary_lists(tr: Transcription) -> tuple[list[str], list[str]]:
 
 
 def redundant_rows(tr: Transcription, tol: float = 1e-9) -> list[str]:
-    """Dependent constraint rows at the initial guess, boundary conditions named first.
+    """Dependent constraint rows at a generic point, boundary conditions named first.
 
     Every vector y with ``J^T y = 0`` is a linear dependency among the rows it touches; for
     each, the boundary-condition rows involved are reported (or, if none, the first rows).
     """
     p = tr.pack()
-    x = tr.point(geodesic_guesses(tr, p)[0], p)
+    x = tr.point(perturbed_guesses(geodesic_guesses(tr, p)[0], tr.horizon_of(p), 1)[0], p)
     J = np.array(ca.DM(tr.solver.get_function("nlp_jac_g")(x, p)[1]))
     if J.size == 0:
         return []
@@ -93,7 +95,8 @@ def check(problem: Problem, N: int, retraction: str = "cayley", rule: str = "mid
     blocks: dict[str, int] = {}
     for b in tr.blocks:
         key = {"node0": "Phi_d", "node": "Phi_d", "nodeN": "Phi_d", "interval": "Phi_d",
-               "recon": "reconstruction", "final": "final conditions"}[b.name]
+               "recon": "reconstruction", "final": "final conditions",
+               "final_conditions": "final conditions"}[b.name]
         blocks[key] = blocks.get(key, 0) + b.m * b.ncols
     given, free = boundary_lists(tr)
     small = tr if N <= SMALL_N else Transcription(problem, Discretization(SMALL_N, retraction,

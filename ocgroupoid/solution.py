@@ -87,6 +87,10 @@ class Solution:
     x: np.ndarray = field(default_factory=lambda: np.zeros(0))
     p: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
+    def __repr__(self) -> str:
+        return (f"Solution({self.problem!r}, status={self.status!r}, cost={self.cost:.10g}, "
+                f"N={self.N}, T={self.T:g}, iterations={self.iterations})")
+
     def raise_for_status(self) -> "Solution":
         """Raise SolverError (with IPOPT's status and the hint) unless solved."""
         if not self.success:

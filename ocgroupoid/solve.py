@@ -117,13 +117,21 @@ class Minimum:
     iterations: int
 
 
-def distinct_minima(results: Iterable[RawResult], rtol: float = 1e-6) -> list[Minimum]:
-    """Successful results grouped by cost (relative tolerance), cheapest first."""
-    found: list[Minimum] = []
+def distinct_minima(results: Iterable[RawResult], rtol: float = 1e-6, xtol: float = 1e-4
+                    ) -> list[Minimum]:
+    """Successful results grouped into local minima, cheapest first.
+
+    Two results are one minimum when their costs agree to ``rtol`` and their NLP points
+    to ``xtol`` (max-norm, relative to max(1, |x|)): minima of equal cost on different
+    trajectories (mirror images, e.g. the plate-ball's) stay apart.
+    """
+    found: list[tuple[Minimum, np.ndarray]] = []
     for r in sorted((r for r in results if r.success), key=lambda r: r.cost):
-        if not any(abs(r.cost - m.cost) <= rtol * max(1.0, abs(m.cost)) for m in found):
-            found.append(Minimum(r.cost, r.label, r.status, r.iterations))
-    return found
+        if not any(abs(r.cost - m.cost) <= rtol * max(1.0, abs(m.cost))
+                   and np.max(np.abs(r.x - x)) <= xtol * max(1.0, float(np.max(np.abs(x))))
+                   for m, x in found):
+            found.append((Minimum(r.cost, r.label, r.status, r.iterations), r.x))
+    return [m for m, _ in found]
 
 
 class Solver:
