@@ -41,6 +41,17 @@ def _number(v: Any, what: str = "value") -> float:
     return float(v)
 
 
+def _positive(v: Any, what: str = "value") -> float:
+    x = _number(v, what)
+    if x <= 0:
+        raise ValueError(f"{what} must be > 0, got {x}")
+    return x
+
+
+Number = Annotated[float, BeforeValidator(_number)]
+PositiveNumber = Annotated[float, BeforeValidator(_positive)]
+
+
 def check_vector(v: Any, n: int, allow_none: bool = False, positive: bool = False
                  ) -> list[Any]:
     """A list of n finite numbers (null components allowed when ``allow_none``)."""
@@ -127,10 +138,7 @@ class Strict(BaseModel):
 
 
 def _positive_time(v: Any) -> float:
-    x = _number(v, "T")
-    if x <= 0:
-        raise ValueError(f"T must be > 0, got {x}")
-    return x
+    return _positive(v, "T")
 
 
 class Horizon(Strict):

@@ -101,6 +101,23 @@ def euler_lagrange_residual(tr: "Transcription", x: np.ndarray, p: np.ndarray,
             + np.einsum("abj,aj->jb", Dss, g_s))
 
 
+def conserved_values(tr: "Transcription", x: np.ndarray, p: np.ndarray
+                     ) -> dict[str, np.ndarray]:
+    """Every declared conserved quantity C(q_k, y_k) at the nodes (node velocities as in
+    :func:`node_velocities`): its drift is the discretisation's, the dynamics keep C fixed."""
+    pb, G = tr.problem, tr.problem.groupoid
+    d = tr.unpack(x, p)
+    q = np.array([np.concatenate([np.ravel(f.base(row[ss])) for f, ss in
+                                  zip(G.factors, G.state_layout.slices)]) for row in d["s"]]) \
+        if G.base_size else np.zeros((tr.N + 1, 0))
+    y = node_velocities(tr, x, p)
+    out = {}
+    for name, C in pb.invariants:
+        fun = ca.Function("C", [pb.q, pb.y, pb.P], [C]).map(len(y))
+        out[name] = np.array(fun(q.T, y.T, d["P"])).T
+    return out
+
+
 def manifold_distance(tr: "Transcription", states: np.ndarray) -> dict[str, float]:
     """Largest distance of the node states from each factor's manifold."""
     G = tr.problem.groupoid
@@ -263,8 +280,9 @@ class Replay:
 
 
 def diagnose(tr: "Transcription", x: np.ndarray, p: np.ndarray, lam_g: np.ndarray,
-             replay: bool = True) -> dict[str, Any]:
-    """All checks (a)-(d) as a JSON-friendly dict."""
+             replay: bool = True, solved: bool = True) -> dict[str, Any]:
+    """All checks (a)-(d) as a JSON-friendly dict. The replay runs for solved points only:
+    the controls of a failed solve can be huge or NaN, and integrating them can take hours."""
     d = tr.unpack(x, p)
     g = np.array(tr.g_fun(x, p)).ravel()
     r = euler_lagrange_residual(tr, x, p, lam_g)
@@ -278,6 +296,12 @@ def diagnose(tr: "Transcription", x: np.ndarray, p: np.ndarray, lam_g: np.ndarra
         if tr.phi_rows().size else 0.0,
         "step_angle_max": step_angles(tr, d["xi"], d["T"]),
     }
-    if replay:
+    if tr.problem.invariants:
+        out["conserved_drift"] = {name: float(np.max(np.abs(C - C[0])))
+                                  for name, C in conserved_values(tr, x, p).items()}
+    if replay and not solved:
+        out["replay"] = {"available": False,
+                         "reason": "not replayed: IPOPT did not solve, the controls are no answer"}
+    elif replay:
         out["replay"] = Replay(tr).run(x, p)
     return out

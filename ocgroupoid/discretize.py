@@ -107,6 +107,12 @@ class Stages:
         charts = [f.chart(s[ss], target[ts]) for f, ss, ts in
                   zip(G.factors, G.state_layout.slices, G.target_layout.slices)]
         self.chart = ca.Function("chart", [s, target], [ca.vertcat(*charts)])
+        ends = [c for _, c in problem.final_conditions]
+        self.final_conditions = ca.Function(
+            "final_conditions", [s, xi, P],
+            [ca.substitute(ca.vertcat(*ends), ca.vertcat(problem.q, problem.y),
+                           ca.vertcat(self._base(s), xi)) if ends else ca.SX(0, 1)],
+            ["s", "y", "P"], ["residual"])
         u = ca.vertcat(*[c for _, c in problem.controls]) if problem.controls else ca.SX(0, 1)
         if problem.order == 2:
             node = Node(problem, s, xp, xn, h, self.retractions)

@@ -107,6 +107,8 @@ class Problem:
         self.T: float | None = None
         self.guess_hook: GuessHook | None = None
         self.rules: dict[str, Callable[..., ca.SX]] = {}
+        self.invariants: list[tuple[str, ca.SX]] = []
+        self.final_conditions: list[tuple[str, ca.SX]] = []
 
     # -- symbols -----------------------------------------------------------------------
 
@@ -214,6 +216,37 @@ class Problem:
         if any(n == name for n, _ in self.constraints):
             raise ConfigError(f"constraint name {name!r} used twice")
         self.constraints.append((name, expr))
+
+    def conserved(self, name: str, expr: ca.SX) -> None:
+        """Declare ``expr(q, y)`` conserved by the dynamics for every control (a Casimir).
+
+        Its final value is then fixed by the initial one, and a final condition that it
+        already determines is reported as over-determined before IPOPT runs (see
+        :mod:`ocgroupoid.boundary`, which also checks the claim against the constraints).
+        """
+        if self.order != 2 or not self.constraints:
+            raise ConfigError(f"conserved quantity {name!r}: declare it after mechanics() or "
+                              "subject_to() of a second-order problem (order=2)")
+        self._end_expression(name, expr, self.invariants, "conserved quantity")
+
+    def final_condition(self, name: str, expr: ca.SX) -> None:
+        """Impose ``expr(q_N, y_N) = 0`` on the final node (order 1: ``expr(q_N)``), for
+        conditions that are not a prescribed value of a state or velocity component."""
+        self._end_expression(name, expr, self.final_conditions, "final condition")
+
+    def _end_expression(self, name: str, expr: ca.SX, where: list[tuple[str, ca.SX]],
+                        what: str) -> None:
+        expr = ca.vec(ca.SX(expr))
+        args = [self.q, self.y, self.P] if self.order == 2 else [self.q, self.P]
+        allowed = {v.name() for v in ca.symvar(ca.vertcat(*args))}
+        foreign = [v.name() for v in ca.symvar(expr) if v.name() not in allowed]
+        if foreign:
+            raise ConfigError(f"{what} {name!r} uses {foreign}: it may depend on the base "
+                              f"coordinates q{', the velocities y' if self.order == 2 else ''}"
+                              " and the parameters only")
+        if any(n == name for n, _ in where):
+            raise ConfigError(f"{what} name {name!r} used twice")
+        where.append((name, expr))
 
     def report_controls(self, expr: ca.SX, names: Sequence[str]) -> None:
         """Declare which expressions are the controls the Solution reports."""

@@ -35,6 +35,9 @@ HINTS = {
     "horizon, or a larger solver.max_iter",
     "Invalid_Number_Detected": "a stage evaluated to NaN/Inf: with first_order a step turned "
     "by pi/2 or more; increase N or use the cayley retraction",
+    "Diverging_Iterates": "the iterates left every physical scale (|x| > 1e8): start from "
+    "another guess (multistart, continuation) or raise solver.ipopt.diverging_iterates_tol if "
+    "your variables are that large",
     "Restoration_Failed": "IPOPT lost feasibility: try multistart or continuation",
     "Search_Direction_Becomes_Too_Small": "the problem may be degenerate: check for redundant "
     "boundary conditions",
@@ -229,7 +232,7 @@ def hint_for(tr: Transcription, r: RawResult) -> str:
         step = float(np.max(np.linalg.norm(d["xi"][:, vs], axis=1))) * d["T"] / tr.N
         limit = np.pi / 2 if tr.disc.retraction == "first_order" else np.pi
         if step > 0.5 * limit:
-            parts.append(f"{f.velocity} turns {step:.2f} rad in one step ({tr.disc.retraction} "
+            parts.append(f"{f.velocity} turns {step:.3g} rad in one step ({tr.disc.retraction} "
                          f"is singular at {limit:.2f}); increase N")
     return "; ".join(parts)
 
@@ -258,7 +261,7 @@ def make_solution(tr: Transcription, r: RawResult, minima: Sequence[Minimum],
     final_rows = tr.rows("final")
     if final_rows.size:
         mult["final"] = r.lam_g[final_rows.ravel()]
-    diagnostics = diagnose(tr, r.x, r.p, r.lam_g, replay=replay)
+    diagnostics = diagnose(tr, r.x, r.p, r.lam_g, replay=replay, solved=r.success)
     diagnostics["reconstruction_residual_nlp"] = recon_nlp
     diagnostics["seconds"] = time.perf_counter() - t0
     params = {name: d["P"][sl].tolist() for name, sl in _param_slices(pb).items()}

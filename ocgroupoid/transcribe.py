@@ -22,6 +22,7 @@ import casadi as ca
 import numpy as np
 
 from .assembly import Block, assemble
+from .boundary import FinalConditions
 from .discretize import Discretization, Stages
 from .errors import BoundaryError, ConfigError
 from .groupoid.product import Groupoid
@@ -31,6 +32,10 @@ DEFAULT_IPOPT: dict[str, Any] = {
     "tol": 1e-10,
     "constr_mult_init_max": 0.0,  # start from zero multipliers: saves a factorisation
     "max_iter": 500,
+    # a start that wanders off (|x| > 1e8: no physical velocity or state) stops at once as
+    # Diverging_Iterates; left to run, MUMPS grows its workspace each iteration and one bad
+    # start of a multi-start took minutes (heavy top, N=256, "long way" guess)
+    "diverging_iterates_tol": 1e8,
     "print_level": 0,
     "sb": "yes",
 }
@@ -132,12 +137,14 @@ class Transcription:
         self.stages = Stages(problem, disc)
         self.masks = Masks.of(problem.groupoid, problem.order, problem.start, problem.end)
         self._index()
+        self.final_check = FinalConditions(self)
+        self.pack(T=problem.T or 1.0)  # over-determined final conditions raise here
         self.blocks = self._blocks()
         x, p = ca.MX.sym("x", self.nx), ca.MX.sym("p", self.np)
         fns = assemble(self.blocks, x, p)
         self.ng = int(fns["g"].numel())
         opts: dict[str, Any] = {f"ipopt.{k}": v for k, v in {**DEFAULT_IPOPT, **(ipopt or {})}.items()}
-        opts.update({"print_time": False, "calc_lam_p": False,
+        opts.update({"print_time": False, "calc_lam_p": False, "show_eval_warnings": False,
                      "cache": {k: fns[k] for k in ("nlp_grad_f", "nlp_jac_g", "nlp_hess_l")}})
         self.nlp = {"x": x, "p": p, "f": fns["f"], "g": fns["g"]}
         try:
@@ -245,6 +252,11 @@ class Transcription:
         if rows.any():
             chart = fun("final", [ds, nt], lambda s, tg: (zero, st.chart(s, tg)[np.flatnonzero(rows).tolist()]))
             blocks.append(Block("final", chart, self._columns(S[:, N], self.iw_end, ncols=1), nt))
+        if self.problem.final_conditions:
+            ends = fun("final_conditions", [ds, dg, npar],
+                       lambda s, v, par: (zero, st.final_conditions(s, v, par)))
+            blocks.append(Block("final_conditions", ends,
+                                self._columns(S[:, N], self.iw_VN, P, ncols=1), npar))
         return blocks
 
     def rows(self, name: str) -> np.ndarray:
@@ -265,6 +277,7 @@ class Transcription:
         G, labels = self.problem.groupoid, [""] * self.ng
         comps = [f"{f.state}[{j}]" for f in G.factors for j in range(f.state_size)]
         names = [n for n, c in self.problem.constraints for _ in range(c.numel())] or ["Phi"]
+        ends = [n for n, c in self.problem.final_conditions for _ in range(c.numel())]
         node_of = {"node0": lambda c: 0, "node": lambda c: c + 1,
                    "nodeN": lambda c: self.N, "interval": lambda c: c}
         for b in self.blocks:
@@ -275,6 +288,8 @@ class Transcription:
                         text = f"reconstruction k={c} {comps[r]}"
                     elif b.name == "final":
                         text = self._final_label(r)
+                    elif b.name == "final_conditions":
+                        text = f"final condition {ends[r]!r}"
                     else:
                         name = names[r] if r < len(names) else f"Phi[{r}]"
                         text = f"{name} at {'node' if b.name != 'interval' else 'interval'} " \
@@ -334,6 +349,7 @@ class Transcription:
         if T is None and pb.T is None:
             raise ConfigError("no horizon: give T or call problem.horizon(T)")
         p[self.p_layout["T"]] = check_horizon(pb.T if T is None else T)
+        self.final_check.check(p)
         return p
 
     def horizon_of(self, p: np.ndarray) -> float:

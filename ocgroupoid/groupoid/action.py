@@ -15,7 +15,7 @@ import numpy as np
 
 from ..errors import ConfigError
 from ..lie import so3
-from ..lie._backend import is_symbolic
+from ..lie._backend import dual, is_symbolic
 from ..lie.group import Array
 from ..lie.retraction import Retraction
 from ..lie.so3 import SO3
@@ -26,8 +26,21 @@ def _cross(a: Array, b: Array) -> Array:
     return ca.cross(a, b) if is_symbolic(a, b) else np.cross(a, b)
 
 
-def _dot(a: Array, b: Array) -> Array:
-    return ca.dot(a, b) if is_symbolic(a, b) else float(np.dot(a, b))
+@dual
+def stereographic(s: Array, target: Array) -> Array:
+    """``(t_i . Gamma)/(1 + Gamma_T . Gamma)``, i = 1, 2, for target = (Gamma_T, t_1, t_2).
+
+    On the far hemisphere (``Gamma_T . Gamma < 0``) the same value is computed as
+    ``tan(theta/2) (t_i . Gamma)/sin(theta)``, ``theta = atan2(sin, cos)``: near the antipode
+    both ``t_i . Gamma`` and ``1 + Gamma_T . Gamma`` round to nothing, and their quotient
+    turned the pole into a spurious root (IPOPT converged to ``Gamma(T) = -Gamma_T``).
+    """
+    g, t1, t2 = target[0:3], target[3:6], target[6:9]
+    a = ca.vertcat(ca.dot(t1, s), ca.dot(t2, s))
+    cos = ca.dot(g, s)
+    far = cos < 0
+    sin = ca.sqrt(ca.if_else(far, ca.sumsqr(a), 1.0))  # the near branch never takes the root
+    return a * ca.if_else(far, ca.tan(ca.atan2(sin, cos) / 2) / sin, 1 / (1 + cos))
 
 
 def tangent_basis(n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -45,6 +58,7 @@ class SphereAction(Factor):
     side = "right"
     state_size = 3
     state_dim = 2
+    manifold = "S^2"
     base_size = 3
     target_size = 9  # Gamma_T and an orthonormal basis (t1, t2) of its tangent plane
 
@@ -62,13 +76,9 @@ class SphereAction(Factor):
         return _cross(s, eta)
 
     def chart(self, s: Array, target: Array) -> Array:
-        """Stereographic coordinates from the antipode of Gamma_T:
-        ``(t_i . Gamma)/(1 + Gamma_T . Gamma)``, i = 1, 2. Two equations, zero only at
-        Gamma_T (the antipode, a root of the bare projection, is a pole here)."""
-        g, t1, t2 = target[0:3], target[3:6], target[6:9]
-        d = 1 + _dot(g, s)
-        return ca.vertcat(_dot(t1, s), _dot(t2, s)) / d if is_symbolic(s, target) else \
-            np.array([_dot(t1, s), _dot(t2, s)]) / d
+        """Stereographic coordinates from the antipode of Gamma_T (see :func:`stereographic`).
+        Two equations, zero only at Gamma_T; the antipode is a pole."""
+        return stereographic(s, target)
 
     def pack_target(self, value: Any) -> np.ndarray:
         g = self.parse_state(value)

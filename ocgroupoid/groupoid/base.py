@@ -34,6 +34,7 @@ class Factor(ABC):
     side: Side  # "right": s_{k+1} = s_k . w (body); "left": s_{k+1} = w . s_k (spatial)
     state_size: int  # length of a flattened node state
     state_dim: int  # manifold dimension of the node state (= boundary conditions on it)
+    manifold: str  # the manifold of the node states, as messages name it (e.g. "S^2")
     base_size: int  # coordinates of the base the Lagrangian sees (0 over a point)
     target_size: int  # length of the packed boundary value of a state (state + chart data)
     componentwise: bool = False  # True when single state components may be left free

@@ -40,6 +40,7 @@ class LieGroupFactor(Factor):
     base_size = 0
     state_size = target_size = 4
     state_dim = 3
+    manifold = "SO(3)"
 
     def __init__(self, group: LieGroup = SO3, state: str = "R", velocity: str = "Omega",
                  side: Side = "right") -> None:

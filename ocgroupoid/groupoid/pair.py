@@ -30,6 +30,7 @@ class Pair(Factor):
         self.group = Rn(n)
         self.state, self.velocity = state, velocity
         self.state_size = self.state_dim = self.base_size = self.target_size = n
+        self.manifold = f"R^{n}"
 
     def step(self, s: Array, ret: Retraction, a: Array) -> Array:
         return s + a

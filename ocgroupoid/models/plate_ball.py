@@ -42,13 +42,13 @@ the two mirror minima (see ``Solution.minima``).
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Annotated, Any
+from typing import TYPE_CHECKING, Any
 
 import casadi as ca
 import numpy as np
-from pydantic import BaseModel, BeforeValidator, Field
+from pydantic import BaseModel, Field
 
-from ..config import Rotation, Strict, Vector2, Vector2Free
+from ..config import Number, PositiveNumber, Rotation, Strict, Vector2, Vector2Free
 from ..groupoid import Groupoid, LieGroupFactor, Pair
 from ..lie import so3
 from ..problem import Problem
@@ -136,18 +136,6 @@ def bends(problem: Problem, tr: "Transcription", p: np.ndarray
         w = rolling_velocity((path[1:] + path[:-1]) / 2, v, P["r"], P["Omega_p"], P["c"])
         out.append((label, np.hstack([v, w])))
     return out
-
-
-def _number(v: Any, positive: bool = False) -> float:
-    if isinstance(v, bool) or not isinstance(v, (int, float)) or not np.isfinite(v):
-        raise ValueError(f"expected a finite number, got {v!r}; write e.g. 1.0")
-    if positive and v <= 0:
-        raise ValueError(f"must be > 0, got {v}")
-    return float(v)
-
-
-Number = Annotated[float, BeforeValidator(_number)]
-PositiveNumber = Annotated[float, BeforeValidator(lambda v: _number(v, positive=True))]
 
 
 class Parameters(Strict):
