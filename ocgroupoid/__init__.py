@@ -6,6 +6,7 @@ intervals with a retraction and ``solve`` it with IPOPT.
 """
 
 from . import lie
+from .codegen import export_c
 from .discretize import Discretization
 from .errors import (
     BoundaryError,
@@ -29,5 +30,5 @@ __all__ = [
     "lie", "so3", "Problem", "Groupoid", "LieGroupFactor", "Pair", "SphereAction",
     "Discretization", "Transcription", "Guess", "Solver", "compile", "solve", "Solution",
     "OcgError", "ConfigError", "DimensionError", "SingularityError", "BoundaryError",
-    "TranscriptionError", "SolverError", "__version__",
+    "TranscriptionError", "SolverError", "export_c", "__version__",
 ]

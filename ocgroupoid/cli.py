@@ -36,8 +36,9 @@ def fail(message: str, code: int = 2) -> None:
 def summary(sol: Any) -> Table:
     """The table printed after a solve."""
     d = sol.diagnostics
-    t = Table(title=f"{sol.problem}  (N={sol.N}, T={sol.T:g}, "
-                    f"{sol.discretization.get('retraction')})", show_header=False)
+    disc = sol.discretization
+    t = Table(title=f"{sol.problem}  (N={sol.N}, T={sol.T:g}, {disc.get('retraction')}, "
+                    f"rule {disc.get('rule')})", show_header=False)
     t.add_column(style="bold")
     t.add_column()
     t.add_row("status", f"[{'green' if sol.success else 'red'}]{sol.status}[/]")
@@ -51,10 +52,15 @@ def summary(sol: Any) -> Table:
     if d["final_residual"]:
         t.add_row("final residual", ", ".join(f"{k} {v:.1e}" for k, v in
                                               d["final_residual"].items()))
+    if d.get("conserved_drift"):
+        t.add_row("conserved drift (max - min)", ", ".join(
+            f"{k} {v:.2e}" for k, v in d["conserved_drift"].items()))
     rep = d.get("replay", {})
     if rep.get("available"):
         t.add_row("replay terminal error", ", ".join(f"{k} {v:.2e}" for k, v in
                                                      rep["terminal_error"].items()))
+    elif rep.get("reason"):
+        t.add_row("replay", rep["reason"])
     if len(sol.minima) > 1:
         t.add_row("local minima", ", ".join(f"{m['cost']:.6g} ({m['label']})"
                                             for m in sol.minima))
@@ -191,6 +197,43 @@ def _status(message: str, quiet: bool) -> Any:
 
 def _silent(_: str) -> None:
     return None
+
+
+@app.command("export-c")
+def export_c_command(
+    file: Path = typer.Argument(..., help="problem file (YAML)"),
+    out_dir: Path = typer.Option(..., "--out", help="folder to write the C project into"),
+    build: bool = typer.Option(False, "--build", help="run make right after exporting"),
+    set_: list[str] = typer.Option([], "--set", help=SET_HELP),
+    cflags: str = typer.Option("", "--cflags", help="extra CFLAGS for --build"),
+) -> None:
+    """Export the compiled problem as a C project (IPOPT via CasADi codegen): `make -C OUT`
+    builds OUT/solve, which prints the solution JSON; OUT/README.md tells the rest."""
+    from . import config
+    from .codegen import export_c, make
+
+    try:
+        cfg = config.load(file, set_)
+        f = cfg.file
+        with _status("exporting C code...", False):
+            done = export_c(config.build(cfg), out_dir, f.horizon.N,
+                            f.discretization.retraction, f.discretization.rule,
+                            f.solver.ipopt)
+        if build:
+            with _status("building with make...", False):
+                binary = make(done.folder, cflags)
+    except OcgError as e:
+        fail(str(e))
+        return
+    out.print(f"{done.problem} (N={done.N}: {done.n_x} variables, {done.n_p} parameters) "
+              f"exported to {done.folder}")
+    if build:
+        out.print(f"built {binary}; run it (prints the solution JSON) or `{binary} PARAMS`")
+    else:
+        out.print(f"build with `make -C {done.folder}`; see {done.folder / 'README.md'}")
+    if f.solver.multistart or f.solver.continuation:
+        err.print("note: the C solver starts from the geodesic guess; multistart and "
+                  "continuation of the problem file stay in Python", highlight=False)
 
 
 def main() -> None:

@@ -29,3 +29,7 @@ class TranscriptionError(OcgError, RuntimeError):
 
 class SolverError(OcgError, RuntimeError):
     """IPOPT did not converge; the message carries its status and a hint."""
+
+
+class ExportError(OcgError, RuntimeError):
+    """Exported C code could not be written or built (missing compiler, IPOPT, ...)."""
