@@ -78,6 +78,7 @@ def load_case(case: Path | str, folder: Path) -> config.Config:
 N_TEST = 16
 CFLAGS = "-O2 -Wall -Wextra -Werror"
 TOL = 1e-8  # the issue's tolerance on cost and trajectory
+VALGRIND = ["so3_rest_to_rest", "heavy_top_rotors", "plate_ball"]
 
 needs_cc = pytest.mark.skipif(shutil.which("cc") is None or shutil.which("make") is None,
                               reason="no C compiler (cc) or make on PATH")
@@ -369,10 +370,10 @@ def test_c_api_returns_error_codes_and_warm_starts(built: Built, tmp_path: Path)
 
 
 @needs_cc
-@pytest.mark.parametrize("built", [ROOT / "problems" / "so3_rest_to_rest.yaml"],
-                         indirect=True, ids=["so3_rest_to_rest"])
+@pytest.mark.parametrize("built", [ROOT / "problems" / f"{name}.yaml" for name in VALGRIND],
+                         indirect=True, ids=VALGRIND)
 def test_valgrind_runs_the_driver_clean(built: Built) -> None:
-    """No invalid reads or writes and no definite leaks (the smallest instance only)."""
+    """No invalid reads or writes and no definite leaks (one file per built-in model)."""
     if shutil.which("valgrind") is None:
         pytest.skip("valgrind is not installed: memory check not run")
     r = subprocess.run(["valgrind", "--error-exitcode=1", "--leak-check=full",
