@@ -35,7 +35,6 @@ from .errors import BoundaryError, ConfigError
 from .mechanics import anchor
 
 if TYPE_CHECKING:
-    from .groupoid.product import Groupoid
     from .problem import Problem
     from .transcribe import Transcription
 
@@ -60,12 +59,13 @@ class FinalConditions:
     def __init__(self, tr: "Transcription", seed: int = 0) -> None:
         pb, G, m = tr.problem, tr.problem.groupoid, tr.masks
         self.tr, self.seed = tr, seed
+        self.laws_checked = False  # declared conservation laws: a property of the model
         ds, dg, nt = G.state_size, G.algebra_dim, G.target_size
         s, v = ca.SX.sym("s", ds), ca.SX.sym("v", dg)
         target = ca.SX.sym("target", nt)
-        self.base = ca.Function("base", [s], [_base(G, s)])
+        self.base = ca.Function("base", [s], [G.base(s)])
         self.rates = {name: _conservation(pb, C) for name, C in pb.invariants}
-        q = _base(G, s)
+        q = G.base(s)
         y = v if pb.order == 2 else ca.SX.zeros(dg)
         at_node = (ca.vertcat(pb.q, pb.y), ca.vertcat(q, y))
         rows: list[ca.SX] = []
@@ -139,14 +139,17 @@ class FinalConditions:
         return np.concatenate(parts), v
 
     def check(self, p: np.ndarray) -> None:
-        """Raise ConfigError for a false conservation law, BoundaryError naming the first
-        dependent final condition."""
-        rng = np.random.default_rng(self.seed)
-        for name, C in self.tr.problem.invariants:
-            self._check_conserved(name, C, p, rng)
+        """Raise ConfigError for a false conservation law (tested at the first p only: the
+        law holds for every instance or for none), BoundaryError naming the first dependent
+        final condition (tested at every p: it depends on the prescribed values)."""
+        if not self.laws_checked:
+            rng = np.random.default_rng(self.seed)
+            for name, C in self.tr.problem.invariants:
+                self._check_conserved(name, C, p, rng)
+            self.laws_checked = True
         if not self.rows:
             return
-        s, v = self.node(p, rng, prescribed=True)
+        s, v = self.node(p, np.random.default_rng(self.seed + 1), prescribed=True)
         J = np.array(self.jacobian(s, v, p[self.tr.p_layout["end"]], p[self.tr.p_layout["P"]]))
         scale = max(1.0, float(np.max(np.abs(J))))
         kept: list[int] = []
@@ -207,11 +210,6 @@ class FinalConditions:
                      f"not {_count(len(group))}; prescribe final.{f.state} instead (imposed in "
                      f"{f.state_dim} chart coordinates)")
         return text + f", or {row.fix}"
-
-
-def _base(G: "Groupoid", s: ca.SX) -> ca.SX:
-    parts = [f.base(s[ss]) for f, ss in zip(G.factors, G.state_layout.slices)]
-    return ca.vertcat(*parts) if G.base_size else ca.SX(0, 1)
 
 
 def _conservation(pb: "Problem", C: ca.SX) -> ca.Function:

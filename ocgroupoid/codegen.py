@@ -39,15 +39,15 @@ import numpy as np
 
 from .discretize import DEFAULT_RULE
 from .errors import ConfigError, ExportError
-from .groupoid.action import SphereAction
+from .groupoid.action import SphereAction, tangent_basis
 from .groupoid.base import Factor
 from .groupoid.lie_group import LieGroupFactor
-from .groupoid.pair import Pair
+from .groupoid.pair import Pair, hermite_basis
 from .lie import so3
 from .lie._backend import safe_if
 from .lie.retraction import Retraction
 from .problem import Problem
-from .solve import Solver
+from .solve import Solver, geodesic_guesses
 from .transcribe import Transcription
 
 TEMPLATES = Path(__file__).resolve().parent / "c_templates"
@@ -117,12 +117,11 @@ class ValueLayout:
                                      tuple(bool(b) for b in prescribed), meaning))
             n += size
 
-        k = lay["P"].start
-        for prm in pb.params.values():
-            size = prm.symbol.numel()
-            add(prm.name, "vector", size, k, size, [True] * size,
-                prm.doc or "physical parameter")
-            k += size
+        P0 = lay["P"].start
+        for name, sl in pb.parameter_slices.items():
+            size = sl.stop - sl.start
+            add(name, "vector", size, P0 + sl.start, size, [True] * size,
+                pb.params[name].doc or "physical parameter")
         for end, key_s, key_v, masks_s, masks_v in (
                 ("initial", "start", "V0", masks.start_state, masks.start_velocity),
                 ("final", "end", "VN", masks.end_state, masks.end_velocity)):
@@ -216,28 +215,6 @@ def write_params(path: str | Path, tr: Transcription, p: np.ndarray, header: str
 # ----------------------------------------------------------------- symbolic helpers
 
 
-def tangent_basis(n: Any) -> tuple[Any, Any]:
-    """:func:`ocgroupoid.groupoid.action.tangent_basis` on a graph: ``t1 = n x e / |n x e|``
-    with e the axis of the smallest ``|n_i|`` (the first one on ties), ``t2 = n x t1``."""
-    a = ca.fabs(n)
-    e = ca.if_else(ca.logic_and(a[0] <= a[1], a[0] <= a[2]), ca.DM([1, 0, 0]),
-                   ca.if_else(a[1] <= a[2], ca.DM([0, 1, 0]), ca.DM([0, 0, 1])))
-    t1 = ca.cross(n, e)
-    t1 = t1 / ca.norm_2(t1)
-    return t1, ca.cross(n, t1)
-
-
-def quaternion_log(e: Any) -> Any:
-    """Rotation vector (angle in [0, pi]) of a quaternion: ``2 atan2(|v|, w) v/|v|`` after
-    normalising and choosing w >= 0 (what ``so3.log`` computes through ``to_quaternion``)."""
-    e = e / ca.norm_2(e)
-    e = ca.if_else(e[0] < 0, -e, e)
-    n2 = ca.sumsqr(e[1:4])
-    small = n2 < 1e-20
-    n = ca.sqrt(safe_if(small, 1.0, n2))
-    return safe_if(small, 2 / e[0], 2 * ca.atan2(n, e[0]) / n) * e[1:4]
-
-
 def _conj(q: Any) -> Any:
     return ca.vertcat(q[0], -q[1:4])
 
@@ -245,10 +222,7 @@ def _conj(q: Any) -> Any:
 def _hermite(s0: Any, v0: Any, sT: Any, vT: Any, T: Any, N: int) -> Any:
     """:meth:`Pair.hermite` on a graph: difference quotients (n x N) of the cubic through
     (s0, v0) at t = 0 and (sT, vT) at t = T, sampled on the N + 1 nodes."""
-    t = np.linspace(0.0, 1.0, N + 1)[:, None]
-    H = [2 * t**3 - 3 * t**2 + 1, t**3 - 2 * t**2 + t, -2 * t**3 + 3 * t**2, t**3 - t**2]
-    Q = sum((ca.mtimes(ca.DM(h), c.T) for h, c in zip(H, (s0, T * v0, sT, T * vT))),
-            ca.MX.zeros(N + 1, s0.numel()))
+    Q = ca.mtimes(ca.DM(hermite_basis(N)), ca.horzcat(s0, T * v0, sT, T * vT).T)
     return ((Q[1:, :] - Q[:-1, :]) / (T / N)).T
 
 
@@ -270,7 +244,7 @@ def _preferred_velocity(f: Factor, ret: Retraction, start: Any, end: Any, V0: An
         q0, qT = start[:4], end[:4]
         rel = so3.quat_multiply(_conj(q0), qT) if f.side == "right" else \
             so3.quat_multiply(qT, _conj(q0))
-        W = so3.exp(quaternion_log(rel) / N)  # "geodesic"
+        W = so3.exp(so3.quat_log(rel) / N)  # "geodesic"
     elif isinstance(f, SphereAction):
         g0, gT = start[:3], end[:3]
         axis = ca.cross(g0, gT)
@@ -281,19 +255,6 @@ def _preferred_velocity(f: Factor, ret: Retraction, start: Any, end: Any, V0: An
     else:
         raise ExportError(f"no guess for {type(f).__name__} in export_c")
     return ca.repmat(ret.tau_inv(W) / (T / N), 1, N)
-
-
-def guess_label(tr: Transcription) -> str:
-    """The label ``geodesic_guesses`` gives its first guess (it depends on the masks only)."""
-    names = []
-    for f, m in zip(tr.problem.groupoid.factors, tr.masks.end_state):
-        if isinstance(f, Pair):
-            names.append("cubic")
-        elif not np.all(m):
-            names.append("rest")
-        else:
-            names.append("geodesic" if isinstance(f, LieGroupFactor) else "great circle")
-    return " + ".join(names)
 
 
 def guess_function(tr: Transcription) -> ca.Function:
@@ -442,8 +403,8 @@ def _names(names: Sequence[str]) -> str:
     return "{" + (", ".join(_c_string(n) for n in names) or "0") + "}"
 
 
-def model_sources(tr: Transcription, layout: ValueLayout, default_p: np.ndarray
-                  ) -> tuple[str, str]:
+def model_sources(tr: Transcription, layout: ValueLayout, default_p: np.ndarray,
+                  guess: str) -> tuple[str, str]:
     """ocg_model.h and ocg_model.c: dimensions, parameter-file keys, JSON field tables."""
     from . import __version__
 
@@ -455,10 +416,9 @@ def model_sources(tr: Transcription, layout: ValueLayout, default_p: np.ndarray
         k += max(rows, 1) * cols
     velocity_fields = [(f.velocity, vs.start, 0, vs.stop - vs.start)
                        for f, vs in zip(G.factors, G.velocity_layout.slices)]
-    param_fields, k = [], tr.p_layout["P"].start
-    for prm in pb.params.values():
-        param_fields.append((prm.name, k, 0, prm.symbol.numel()))
-        k += prm.symbol.numel()
+    P0 = tr.p_layout["P"].start
+    param_fields = [(name, P0 + sl.start, 0, sl.stop - sl.start)
+                    for name, sl in pb.parameter_slices.items()]
     controls = [n for n, _ in pb.controls]
     multipliers = [n for n, c in pb.constraints for _ in range(c.numel())]
     blocks = ",\n".join(
@@ -472,7 +432,7 @@ def model_sources(tr: Transcription, layout: ValueLayout, default_p: np.ndarray
         "OCG_N_PARAMETER_FIELDS": len(param_fields), "OCG_NU": len(controls),
         "OCG_N_MULTIPLIER_NAMES": len(multipliers),
         "OCG_RETRACTION": _c_string(tr.disc.retraction), "OCG_RULE": _c_string(tr.disc.rule),
-        "OCG_GUESS_LABEL": _c_string(guess_label(tr)),
+        "OCG_GUESS_LABEL": _c_string(guess),
     }
     header = "\n".join([
         f"/* Generated by ocgroupoid {__version__} for {pb.name}: the exported instance's "
@@ -562,7 +522,8 @@ def export_c(problem: Problem | Solver, folder: str | Path, N: int = 64,
     layout = ValueLayout(tr)
     p = tr.pack()
     _generate(tr, layout, folder)
-    header, source = model_sources(tr, layout, p)
+    guess = geodesic_guesses(tr, p)[0].label  # what the C solver starts from
+    header, source = model_sources(tr, layout, p, guess)
     (folder / "ocg_model.h").write_text(header)
     (folder / "ocg_model.c").write_text(source)
     for name in VERBATIM:
@@ -573,7 +534,7 @@ def export_c(problem: Problem | Solver, folder: str | Path, N: int = 64,
     info = {"PROBLEM": pb.name, "N": tr.N, "RETRACTION": tr.disc.retraction,
             "RULE": tr.disc.rule, "ORDER": pb.order, "NX": tr.nx, "NP": tr.np, "NG": tr.ng,
             "NV": layout.size, "VERSION": __version__, "CASADI": ca.__version__,
-            "IPOPT_LIB": lib, "IPOPT_INCLUDE": include, "GUESS": guess_label(tr),
+            "IPOPT_LIB": lib, "IPOPT_INCLUDE": include, "GUESS": guess,
             "KEYS": _blocks_table(layout)}
     (folder / "Makefile").write_text(_fill((TEMPLATES / "Makefile.in").read_text(), info))
     (folder / "README.md").write_text(_fill((TEMPLATES / "README.md.in").read_text(), info))

@@ -107,14 +107,12 @@ def conserved_values(tr: "Transcription", x: np.ndarray, p: np.ndarray
     :func:`node_velocities`): its drift is the discretisation's, the dynamics keep C fixed."""
     pb, G = tr.problem, tr.problem.groupoid
     d = tr.unpack(x, p)
-    q = np.array([np.concatenate([np.ravel(f.base(row[ss])) for f, ss in
-                                  zip(G.factors, G.state_layout.slices)]) for row in d["s"]]) \
-        if G.base_size else np.zeros((tr.N + 1, 0))
     y = node_velocities(tr, x, p)
+    s = ca.SX.sym("s", G.state_size)
     out = {}
     for name, C in pb.invariants:
-        fun = ca.Function("C", [pb.q, pb.y, pb.P], [C]).map(len(y))
-        out[name] = np.array(fun(q.T, y.T, d["P"])).T
+        fun = ca.Function("C", [s, pb.y, pb.P], [ca.substitute(C, pb.q, G.base(s))])
+        out[name] = np.array(fun.map(len(y))(d["s"].T, y.T, d["P"])).T
     return out
 
 
@@ -184,8 +182,7 @@ class Replay:
         self.tr = tr
         s, y, u = ca.SX.sym("s", G.state_size), ca.SX.sym("y", G.algebra_dim), \
             ca.SX.sym("u", len(pb.controls))
-        q = ca.vertcat(*[f.base(s[ss]) for f, ss in zip(G.factors, G.state_layout.slices)]) \
-            if G.base_size else ca.SX(0, 1)
+        q = G.base(s)
         sdot = ca.vertcat(*[f.state_rate(s[ss], y[vs]) for f, ss, vs in
                             zip(G.factors, G.state_layout.slices, G.velocity_layout.slices)])
         self.reason = ""

@@ -64,9 +64,7 @@ class Node:
 
     @property
     def q(self) -> ca.SX:
-        G = self.problem.groupoid
-        parts = [f.base(self.s[ss]) for f, ss in zip(G.factors, G.state_layout.slices)]
-        return ca.vertcat(*parts) if parts else ca.SX.zeros(0, 1)
+        return self.problem.groupoid.base(self.s)
 
     @property
     def y(self) -> ca.SX:
@@ -111,7 +109,7 @@ class Stages:
         self.final_conditions = ca.Function(
             "final_conditions", [s, xi, P],
             [ca.substitute(ca.vertcat(*ends), ca.vertcat(problem.q, problem.y),
-                           ca.vertcat(self._base(s), xi)) if ends else ca.SX(0, 1)],
+                           ca.vertcat(G.base(s), xi)) if ends else ca.SX(0, 1)],
             ["s", "y", "P"], ["residual"])
         u = ca.vertcat(*[c for _, c in problem.controls]) if problem.controls else ca.SX(0, 1)
         if problem.order == 2:
@@ -122,7 +120,7 @@ class Stages:
                 [h * node.substitute(problem.cost), h * phi, node.substitute(u)],
                 ["s", "xi_prev", "xi_next", "T", "P"], ["L", "Phi", "u"])
         else:
-            q_mid = self._base(self._step(s, xi / 2, h))
+            q_mid = G.base(self._step(s, xi / 2, h))
             args = [problem.q, problem.y]
             psi = ca.vertcat(*[c for _, c in problem.constraints]) if problem.constraints \
                 else ca.SX(0, 1)
@@ -135,11 +133,6 @@ class Stages:
         return ca.vertcat(*[f.step(s[ss], r, h * xi[vs]) for f, r, ss, vs in
                             zip(G.factors, self.retractions, G.state_layout.slices,
                                 G.velocity_layout.slices)])
-
-    def _base(self, s: ca.SX) -> ca.SX:
-        G = self.problem.groupoid
-        parts = [f.base(s[ss]) for f, ss in zip(G.factors, G.state_layout.slices)]
-        return ca.vertcat(*parts) if parts else ca.SX.zeros(0, 1)
 
     def _node_constraints(self, node: Node) -> ca.SX:
         pb = self.problem

@@ -130,6 +130,15 @@ class Problem:
         syms = [p.symbol for p in self.params.values()]
         return ca.vertcat(*syms) if syms else ca.SX.zeros(0, 1)
 
+    @property
+    def parameter_slices(self) -> dict[str, slice]:
+        """Where each parameter sits in P (declaration order)."""
+        out, k = {}, 0
+        for name, prm in self.params.items():
+            out[name] = slice(k, k + prm.symbol.numel())
+            k = out[name].stop
+        return out
+
     def parameter_values(self, overrides: dict[str, Any] | None = None) -> np.ndarray:
         """Stacked parameter values, defaults overridden by ``overrides``."""
         overrides = dict(overrides or {})

@@ -264,7 +264,7 @@ def make_solution(tr: Transcription, r: RawResult, minima: Sequence[Minimum],
     diagnostics = diagnose(tr, r.x, r.p, r.lam_g, replay=replay, solved=r.success)
     diagnostics["reconstruction_residual_nlp"] = recon_nlp
     diagnostics["seconds"] = time.perf_counter() - t0
-    params = {name: d["P"][sl].tolist() for name, sl in _param_slices(pb).items()}
+    params = {name: d["P"][sl].tolist() for name, sl in pb.parameter_slices.items()}
     return Solution(
         problem=pb.name, success=r.success, status=r.status, N=N, T=T, cost=r.cost,
         iterations=r.iterations, solve_seconds=r.solve_seconds,
@@ -276,12 +276,3 @@ def make_solution(tr: Transcription, r: RawResult, minima: Sequence[Minimum],
         control_names=[n for n, _ in pb.controls], multipliers=mult, diagnostics=diagnostics,
         minima=[m.__dict__ for m in minima], hint=hint_for(tr, r), x=r.x, p=r.p,
     )
-
-
-def _param_slices(pb: Problem) -> dict[str, slice]:
-    out, k = {}, 0
-    for name, prm in pb.params.items():
-        n = prm.symbol.numel()
-        out[name] = slice(k, k + n)
-        k += n
-    return out

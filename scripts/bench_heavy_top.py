@@ -33,7 +33,7 @@ RULES = ("midpoint", "lie_poisson")
 def row(solver: og.Solver, sol: og.Solution, seconds: float, repeats: int) -> dict:
     """Figures of one solve; the IPOPT time is the median of re-solves from the same start."""
     tr = solver.transcription
-    best = next((m["label"] for m in sol.minima if m["cost"] == sol.cost), None)
+    best = sol.discretization.get("start")  # the label of the start that won
     guess = next((g for g in solver.guesses(tr, sol.p, True) if g.label == best), None)
     ipopt_seconds = median_time(lambda: tr.solve(guess, sol.p), repeats)[0] if guess else \
         sol.solve_seconds

@@ -43,12 +43,17 @@ def stereographic(s: Array, target: Array) -> Array:
     return a * ca.if_else(far, ca.tan(ca.atan2(sin, cos) / 2) / sin, 1 / (1 + cos))
 
 
-def tangent_basis(n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """An orthonormal basis (t1, t2) of the plane orthogonal to the unit vector n."""
-    e = np.eye(3)[int(np.argmin(np.abs(n)))]
-    t1 = np.cross(n, e)
-    t1 /= np.linalg.norm(t1)
-    return t1, np.cross(n, t1)
+@dual
+def tangent_basis(n: Array) -> tuple[Array, Array]:
+    """An orthonormal basis (t1, t2) of the plane orthogonal to the unit vector n:
+    ``t1 = n x e / |n x e|`` with e the axis of the smallest ``|n_i|`` (the first one on
+    ties), ``t2 = n x t1``."""
+    a = ca.fabs(n)
+    e = ca.if_else(ca.logic_and(a[0] <= a[1], a[0] <= a[2]), ca.DM([1, 0, 0]),
+                   ca.if_else(a[1] <= a[2], ca.DM([0, 1, 0]), ca.DM([0, 0, 1])))
+    t1 = ca.cross(n, e)
+    t1 = t1 / ca.norm_2(t1)
+    return t1, ca.cross(n, t1)
 
 
 class SphereAction(Factor):

@@ -20,6 +20,14 @@ from ..lie.rn import Rn
 from .base import Factor
 
 
+def hermite_basis(N: int) -> np.ndarray:
+    """The cubic Hermite basis (h00, h10, h01, h11) on the N + 1 nodes of [0, 1], as columns:
+    rows times (s0, T v0, sT, T vT) give the cubic's node values."""
+    t = np.linspace(0.0, 1.0, N + 1)[:, None]
+    return np.hstack([2 * t**3 - 3 * t**2 + 1, t**3 - 2 * t**2 + t, -2 * t**3 + 3 * t**2,
+                      t**3 - t**2])
+
+
 class Pair(Factor):
     """R^n x R^n => R^n with positions ``state`` and velocities ``velocity``."""
 
@@ -74,10 +82,7 @@ class Pair(Factor):
     def hermite(self, s0: np.ndarray, v0: np.ndarray, sT: np.ndarray, vT: np.ndarray,
                 T: float, N: int) -> np.ndarray:
         """Velocities (N x n) of the cubic through (s0, v0) and (sT, vT), as differences."""
-        t = np.linspace(0.0, 1.0, N + 1)[:, None]
-        h00, h10 = 2 * t**3 - 3 * t**2 + 1, t**3 - 2 * t**2 + t
-        h01, h11 = -2 * t**3 + 3 * t**2, t**3 - t**2
-        q = h00 * s0 + h10 * T * v0 + h01 * sT + h11 * T * vT
+        q = hermite_basis(N) @ np.vstack([s0, T * v0, sT, T * vT])
         return np.diff(q, axis=0) / (T / N)
 
     # -- groupoid structure maps --------------------------------------------------------

@@ -10,6 +10,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Sequence
 
+import casadi as ca
+
 from ..errors import ConfigError
 from .base import Factor
 
@@ -82,6 +84,11 @@ class Groupoid:
             if f.velocity == name:
                 return i, f
         raise ConfigError(f"no velocity called {name!r}; velocities are {self.velocity_names}")
+
+    def base(self, s: ca.SX) -> ca.SX:
+        """Base coordinates q (what the Lagrangian sees) of a product node state s."""
+        parts = [f.base(s[ss]) for f, ss in zip(self.factors, self.state_layout.slices)]
+        return ca.vertcat(*parts) if self.base_size else ca.SX(0, 1)
 
     @property
     def state_names(self) -> list[str]:

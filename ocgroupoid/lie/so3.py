@@ -126,13 +126,7 @@ def log(R: Array) -> Array:
     """
     if is_symbolic(R):
         return _log_symbolic(R)
-    q = to_quaternion(R)
-    v = q[1:]
-    n = float(np.linalg.norm(v))
-    if n < 1e-300:
-        return np.zeros(3)
-    angle = 2.0 * np.arctan2(n, q[0])
-    return angle * v / n
+    return quat_log(to_quaternion(R))
 
 
 # ------------------------------------------------------------------ unit quaternions
@@ -143,6 +137,18 @@ def quat_multiply(p: Array, q: Array) -> Array:
     """Hamilton product p q of quaternions (w, x, y, z); R(p q) = R(p) R(q)."""
     pw, pv, qw, qv = p[0], p[1:4], q[0], q[1:4]
     return ca.vertcat(pw * qw - ca.dot(pv, qv), pw * qv + qw * pv + ca.cross(pv, qv))
+
+
+@dual
+def quat_log(q: Array) -> Array:
+    """Rotation vector (angle in [0, pi]) of a quaternion: ``2 atan2(|v|, w) v/|v|`` after
+    normalising and choosing w >= 0 (``2 v / w`` to first order at the identity)."""
+    e = q / ca.norm_2(q)
+    e = ca.if_else(e[0] < 0, -e, e)
+    n2 = ca.sumsqr(e[1:4])
+    small = n2 < 1e-20
+    n = ca.sqrt(safe_if(small, 1.0, n2))
+    return safe_if(small, 2 / e[0], 2 * ca.atan2(n, e[0]) / n) * e[1:4]
 
 
 @dual

@@ -169,7 +169,7 @@ def rotor_guesses(problem: Problem, tr: "Transcription", p: np.ndarray
     P = p[tr.p_layout["P"]]
     size = ca.Function("Pi", [problem.y, problem.P], [ca.norm_2(momentum(problem)[0])])
     Pi = max(float(size(y, P)) for y in [p[tr.p_layout["V0"]], *base])
-    J = np.asarray(ca.Function("J", [problem.P], [problem.params["J"].symbol])(P)).ravel()
+    J = P[problem.parameter_slices["J"]]
     t = (np.arange(tr.N) + 0.5) / tr.N
     out = []
     for r in range(rotors.algebra_dim):
