@@ -275,3 +275,12 @@ def test_a_diverging_solve_fails_fast_with_a_hint(tmp_path) -> None:
     assert not sol.success and sol.status == "Diverging_Iterates"
     assert sol.diagnostics["replay"]["available"] is False
     assert "increase N" in sol.hint and "multistart" in sol.hint
+
+
+def test_a_false_conservation_law_is_rejected() -> None:
+    """Declaring a quantity conserved that the dynamics change (Omega_1 here) is an error
+    before IPOPT runs, not a silently wrong over-determination test."""
+    pb = heavy_top()
+    pb.conserved("Omega1", pb.velocity("Omega")[0])
+    with pytest.raises(og.ConfigError, match=r"'Omega1' is not conserved by the dynamics"):
+        og.compile(pb, N=16)
