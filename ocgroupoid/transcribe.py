@@ -140,8 +140,10 @@ class Transcription:
         self.final_check = FinalConditions(self)
         self.pack(T=problem.T or 1.0)  # over-determined final conditions raise here
         self.blocks = self._blocks()
+        t1 = time.perf_counter()
         x, p = ca.MX.sym("x", self.nx), ca.MX.sym("p", self.np)
         fns = assemble(self.blocks, x, p)
+        t2 = time.perf_counter()
         self.ng = int(fns["g"].numel())
         opts: dict[str, Any] = {f"ipopt.{k}": v for k, v in {**DEFAULT_IPOPT, **(ipopt or {})}.items()}
         opts.update({"print_time": False, "calc_lam_p": False, "show_eval_warnings": False,
@@ -151,9 +153,12 @@ class Transcription:
             self.solver = ca.nlpsol(f"{problem.name}_N{self.N}", "ipopt", self.nlp, opts)
         except RuntimeError as err:
             raise ConfigError(f"IPOPT rejected the options {ipopt}: {err}") from None
+        t3 = time.perf_counter()
         self.f_fun = ca.Function("f", [x, p], [fns["f"]])
         self.g_fun = ca.Function("g", [x, p], [fns["g"]])
         self.build_seconds = time.perf_counter() - t0
+        #: where the build time went: stage graphs and layout, derivative assembly, IPOPT setup
+        self.build_phases = {"stages": t1 - t0, "assembly": t2 - t1, "nlpsol": t3 - t2}
 
     # -- layout -------------------------------------------------------------------------
 
