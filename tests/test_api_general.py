@@ -58,8 +58,8 @@ def test_replay_of_accelerations_lands_on_target(sols) -> None:
     assert np.all(np.log2(np.array(errs[:-1]) / np.array(errs[1:])) >= 1.8)
 
 
-def test_first_order_problem_on_a_product() -> None:
-    """A kinematic first-order problem: reach a target on R^2 x SO(3) with w = (v, 0)."""
+def rolling_problem(**final: object) -> og.Problem:
+    """A kinematic first-order problem on R^2 x SO(3): roll, w = (-v_y, v_x, 0)."""
     G = og.Groupoid(og.Pair(2, "xy", "v"), og.LieGroupFactor(state="R", velocity="w",
                                                              side="left"))
     pb = og.Problem(G, name="roll", order=1)
@@ -68,9 +68,14 @@ def test_first_order_problem_on_a_product() -> None:
     pb.subject_to(w - ca.vertcat(-v[1], v[0], 0), name="roll")
     pb.report_controls(v, ["vx", "vy"])
     pb.initial(xy=[0, 0], R=np.eye(3))
-    pb.final(xy=[1.0, 0.0])
+    pb.final(**final)
     pb.horizon(1.0)
-    sol = og.solve(pb, N=32)
+    return pb
+
+
+def test_first_order_problem_on_a_product() -> None:
+    """Reach a target on R^2 with the attitude free: roll straight at unit speed."""
+    sol = og.solve(rolling_problem(xy=[1.0, 0.0]), N=32)
     assert sol.success
     assert np.allclose(sol.controls[1:-1], [[1.0, 0.0]] * 32, atol=1e-8)
     assert sol.cost == pytest.approx(0.5, rel=1e-9)

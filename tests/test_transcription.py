@@ -9,21 +9,11 @@ import pytest
 import ocgroupoid as og
 from ocgroupoid.models.rigid_body import rigid_body
 
-from .test_api_general import minimum_acceleration
+from .test_api_general import minimum_acceleration, rolling_problem
 
 
 def rolling() -> og.Problem:
-    G = og.Groupoid(og.Pair(2, "xy", "v"), og.LieGroupFactor(state="R", velocity="w",
-                                                             side="left"))
-    pb = og.Problem(G, name="roll", order=1)
-    v, w = pb.velocity("v"), pb.velocity("w")
-    pb.minimize(0.5 * ca.sumsqr(v))
-    pb.subject_to(w - ca.vertcat(-v[1], v[0], 0), name="roll")
-    pb.report_controls(v, ["vx", "vy"])
-    pb.initial(xy=[0, 0], R=np.eye(3))
-    pb.final(xy=[1.0, 0.5], R=og.so3.from_rotvec([-0.5, 1.0, 0.3]))
-    pb.horizon(1.0)
-    return pb
+    return rolling_problem(xy=[1.0, 0.5], R=og.so3.from_rotvec([-0.5, 1.0, 0.3]))
 
 
 def free_end_velocity() -> og.Problem:
