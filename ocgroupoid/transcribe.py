@@ -41,6 +41,15 @@ DEFAULT_IPOPT: dict[str, Any] = {
 }
 
 
+def nlpsol_options(ipopt: dict[str, Any] | None, fns: dict[str, ca.Function]) -> dict[str, Any]:
+    """Options of ``casadi.nlpsol``: IPOPT's (defaults overridden by ``ipopt``) and the
+    assembled derivative functions in its cache, so that it derives none itself."""
+    opts: dict[str, Any] = {f"ipopt.{k}": v for k, v in {**DEFAULT_IPOPT, **(ipopt or {})}.items()}
+    opts.update({"print_time": False, "calc_lam_p": False, "show_eval_warnings": False,
+                 "cache": {k: fns[k] for k in ("nlp_grad_f", "nlp_jac_g", "nlp_hess_l")}})
+    return opts
+
+
 @dataclass(frozen=True)
 class Masks:
     """Which boundary components are prescribed (True) — structural, fixed at build time."""
@@ -145,12 +154,10 @@ class Transcription:
         fns = assemble(self.blocks, x, p)
         t2 = time.perf_counter()
         self.ng = int(fns["g"].numel())
-        opts: dict[str, Any] = {f"ipopt.{k}": v for k, v in {**DEFAULT_IPOPT, **(ipopt or {})}.items()}
-        opts.update({"print_time": False, "calc_lam_p": False, "show_eval_warnings": False,
-                     "cache": {k: fns[k] for k in ("nlp_grad_f", "nlp_jac_g", "nlp_hess_l")}})
         self.nlp = {"x": x, "p": p, "f": fns["f"], "g": fns["g"]}
         try:
-            self.solver = ca.nlpsol(f"{problem.name}_N{self.N}", "ipopt", self.nlp, opts)
+            self.solver = ca.nlpsol(f"{problem.name}_N{self.N}", "ipopt", self.nlp,
+                                    nlpsol_options(ipopt, fns))
         except RuntimeError as err:
             raise ConfigError(f"IPOPT rejected the options {ipopt}: {err}") from None
         t3 = time.perf_counter()

@@ -29,7 +29,7 @@ import ocgroupoid as og  # noqa: E402
 from ocgroupoid.models.rigid_body import rigid_body  # noqa: E402
 from ocgroupoid.assembly import StageDerivatives  # noqa: E402
 from ocgroupoid.solve import geodesic_guesses  # noqa: E402
-from ocgroupoid.transcribe import DEFAULT_IPOPT, Transcription  # noqa: E402
+from ocgroupoid.transcribe import Transcription, nlpsol_options  # noqa: E402
 
 
 def casadi_floor(tr: Transcription, repeats: int) -> dict[str, float]:
@@ -46,8 +46,7 @@ def casadi_floor(tr: Transcription, repeats: int) -> dict[str, float]:
     entries = sum(n * f.nnz_out(0) for n, f in derivatives)
     index = np.random.default_rng(0).integers(0, entries, entries)
     src = ca.MX.sym("src", entries)
-    opts = {"print_time": False, "calc_lam_p": False, "cache": fns,
-            **{f"ipopt.{k}": v for k, v in DEFAULT_IPOPT.items()}}
+    opts = nlpsol_options(None, fns)
     times: dict[str, list[float]] = {"nlpsol": [], "map": [], "sparsity": [], "index": []}
     for _ in range(repeats):
         fresh = [(n, ca.Function(f.name(), f.sx_in(), f.call(f.sx_in()))) for n, f in stage_funs]
