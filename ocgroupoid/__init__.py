@@ -2,12 +2,16 @@
 
 State the continuous problem with :class:`Problem` on a product of groupoid factors
 (:class:`LieGroupFactor`, :class:`Pair`, :class:`SphereAction`), then ``compile`` it on N
-intervals with a retraction and ``solve`` it with IPOPT.
+intervals with a scheme and a retraction, and ``solve`` it with IPOPT.
+
+The package is laid out as its pipeline: ``lie`` -> ``groupoid`` -> ``model`` (problem,
+mechanics) -> ``nlp`` (schemes, layout, assembly, transcription) -> ``solve`` (solver,
+guesses, read-out, diagnostics, solution) -> ``models`` (canonical systems) -> ``files``
+(YAML), ``export`` (C code), ``plotting`` -> ``cli``.
 """
 
 from . import lie
-from .codegen import export_c
-from .discretize import Discretization
+from ._version import __version__
 from .errors import (
     BoundaryError,
     ConfigError,
@@ -17,18 +21,16 @@ from .errors import (
     SolverError,
     TranscriptionError,
 )
+from .export import export_c
 from .groupoid import Groupoid, LieGroupFactor, Pair, SphereAction
 from .lie import so3
-from .problem import Problem
-from .solution import Solution
-from .solve import Solver, compile, solve
-from .transcribe import Guess, Transcription
-
-__version__ = "0.1.0"
+from .model import GuessContext, Problem
+from .nlp import Discretization, Guess, Transcription
+from .solve import Solution, Solver, compile, solve
 
 __all__ = [
-    "lie", "so3", "Problem", "Groupoid", "LieGroupFactor", "Pair", "SphereAction",
-    "Discretization", "Transcription", "Guess", "Solver", "compile", "solve", "Solution",
-    "OcgError", "ConfigError", "DimensionError", "SingularityError", "BoundaryError",
-    "TranscriptionError", "SolverError", "export_c", "__version__",
+    "lie", "so3", "Problem", "GuessContext", "Groupoid", "LieGroupFactor", "Pair",
+    "SphereAction", "Discretization", "Transcription", "Guess", "Solver", "compile", "solve",
+    "Solution", "OcgError", "ConfigError", "DimensionError", "SingularityError",
+    "BoundaryError", "TranscriptionError", "SolverError", "export_c", "__version__",
 ]

@@ -37,8 +37,8 @@ def summary(sol: Any) -> Table:
     """The table printed after a solve."""
     d = sol.diagnostics
     disc = sol.discretization
-    t = Table(title=f"{sol.problem}  (N={sol.N}, T={sol.T:g}, {disc.get('retraction')}, "
-                    f"rule {disc.get('rule')})", show_header=False)
+    t = Table(title=f"{sol.problem}  (N={sol.N}, T={sol.T:g}, {disc.get('scheme', 'order2')}, "
+                    f"{disc.get('retraction')}, rule {disc.get('rule')})", show_header=False)
     t.add_column(style="bold")
     t.add_column()
     t.add_row("status", f"[{'green' if sol.success else 'red'}]{sol.status}[/]")
@@ -78,17 +78,18 @@ def solve(
     quiet: bool = typer.Option(False, "--quiet", "-q", help="print only errors"),
 ) -> None:
     """Build, solve and summarise a problem file; optionally write the solution JSON."""
-    from . import config
+    from . import files
     from .solve import compile as compile_problem
 
     try:
-        cfg = config.load(file, set_)
-        problem = config.build(cfg)
+        cfg = files.load(file, set_)
+        problem = files.build(cfg)
         f = cfg.file
+        d = f.discretization
         t0 = time.perf_counter()
         with _status("building the NLP...", quiet):
-            solver = compile_problem(problem, f.horizon.N, f.discretization.retraction,
-                                     f.discretization.rule, f.solver.ipopt)
+            solver = compile_problem(problem, f.horizon.N, d.retraction, d.rule, f.solver.ipopt,
+                                     d.scheme)
         with _status("solving...", quiet) as status:
             sol = solver.solve(multistart=f.solver.multistart,
                                continuation=f.solver.continuation or None,
@@ -121,19 +122,20 @@ def check(
 
     Exits 2 when the file is invalid or a boundary condition is redundant.
     """
-    from . import config
-    from .checks import check as run_check
+    from . import files
+    from .solve.checks import check as run_check
 
     try:
-        cfg = config.load(file, set_)
+        cfg = files.load(file, set_)
         f = cfg.file
-        report = run_check(config.build(cfg), f.horizon.N, f.discretization.retraction,
-                           f.discretization.rule, f.solver.ipopt)
+        d = f.discretization
+        report = run_check(files.build(cfg), f.horizon.N, d.retraction, d.rule, f.solver.ipopt,
+                           d.scheme)
     except OcgError as e:
         fail(str(e))
         return
     t = Table(title=f"{cfg.name}: model {f.model}, N={f.horizon.N}, T={f.horizon.T:g}, "
-                    f"{f.discretization.retraction}", show_header=False)
+                    f"{d.scheme}, {d.retraction}", show_header=False)
     t.add_column(style="bold")
     t.add_column()
     t.add_row("variables", str(report.variables))
@@ -158,7 +160,7 @@ def plot(
     import json
 
     from .plotting import plot_solution
-    from .solution import Solution
+    from .solve.solution import Solution
 
     try:
         sol = Solution.from_json(solution)
@@ -175,8 +177,10 @@ def plot(
 
 @app.command("list")
 def list_models() -> None:
-    """Built-in models and the problem files shipped in problems/."""
+    """Built-in models, discretisation schemes and the problem files shipped in problems/."""
+    from .lie.retraction import RETRACTION_NAMES
     from .models import MODELS
+    from .nlp.schemes import SCHEMES
 
     t = Table(title="models")
     t.add_column("model")
@@ -184,6 +188,16 @@ def list_models() -> None:
     for name, spec in sorted(MODELS.items()):
         t.add_row(name, spec.summary)
     out.print(t)
+    t = Table(title="schemes (discretization.scheme)")
+    t.add_column("scheme")
+    t.add_column("order")
+    t.add_column("problems")
+    t.add_column("what it is")
+    for name, by_order in SCHEMES.items():
+        for problem_order, cls in sorted(by_order.items(), reverse=True):
+            t.add_row(name, str(cls.accuracy), f"order-{problem_order}", cls.summary)
+    out.print(t)
+    out.print("retractions (discretization.retraction): " + ", ".join(RETRACTION_NAMES))
     folder = Path.cwd() / "problems"
     if folder.is_dir():
         files = sorted(folder.glob("*.yaml"))
@@ -209,16 +223,16 @@ def export_c_command(
 ) -> None:
     """Export the compiled problem as a C project (IPOPT via CasADi codegen): `make -C OUT`
     builds OUT/solve, which prints the solution JSON; OUT/README.md tells the rest."""
-    from . import config
-    from .codegen import export_c, make
+    from . import files
+    from .export import export_c, make
 
     try:
-        cfg = config.load(file, set_)
+        cfg = files.load(file, set_)
         f = cfg.file
+        d = f.discretization
         with _status("exporting C code...", False):
-            done = export_c(config.build(cfg), out_dir, f.horizon.N,
-                            f.discretization.retraction, f.discretization.rule,
-                            f.solver.ipopt)
+            done = export_c(files.build(cfg), out_dir, f.horizon.N, d.retraction, d.rule,
+                            f.solver.ipopt, scheme=d.scheme)
         if build:
             with _status("building with make...", False):
                 binary = make(done.folder, cflags)

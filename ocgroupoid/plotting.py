@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from .solution import write_atomic
+from .solve.solution import write_atomic
 
 
 def plot_solution(sol: Any, path: str | Path, dpi: int = 110) -> Path:

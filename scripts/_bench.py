@@ -14,7 +14,7 @@ import casadi
 import numpy as np
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-from ocgroupoid.solution import _jsonable, write_atomic
+from ocgroupoid.solve.solution import _jsonable, write_atomic
 
 RESULTS = Path(__file__).resolve().parent.parent / "results"
 

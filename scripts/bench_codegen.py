@@ -27,8 +27,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 from _bench import arguments, progress, save  # noqa: E402
 
-from ocgroupoid import config  # noqa: E402
-from ocgroupoid.codegen import export_c, make  # noqa: E402
+from ocgroupoid import files  # noqa: E402
+from ocgroupoid.export.codegen import export_c, make  # noqa: E402
 from ocgroupoid.solve import geodesic_guesses  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -62,14 +62,14 @@ def cases(quick: bool) -> list[tuple[Path, int]]:
     if quick:
         return [(so3, 32)]
     files = sorted((ROOT / "problems").glob("*.yaml"))
-    return [(f, config.load(f).file.horizon.N) for f in files] + [(so3, 256), (so3, 1024)]
+    return [(f, files.load(f).file.horizon.N) for f in files] + [(so3, 256), (so3, 1024)]
 
 
 def measure(path: Path, N: int, repeats: int, folder: Path) -> dict:
-    cfg = config.load(path)
+    cfg = files.load(path)
     f = cfg.file
     t0 = time.perf_counter()
-    exp = export_c(config.build(cfg), folder, N, f.discretization.retraction,
+    exp = export_c(files.build(cfg), folder, N, f.discretization.retraction,
                    f.discretization.rule, f.solver.ipopt)
     export_seconds = time.perf_counter() - t0
     (folder / "bench.c").write_text(HARNESS)

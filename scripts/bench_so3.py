@@ -6,6 +6,11 @@ most ~20x from N=64 to 1024 (linear in N); median solve at N=64 aimed at <= 10 m
 is split into its phases (stage graphs, derivative assembly, IPOPT setup), and the CasADi
 calls every build of the NLP must make are timed alone at the smallest and largest N: the
 floor under any build, whatever its bookkeeping.
+
+Baselines the hand-written derivative assembly beats, on the same mapped stage graph, the
+same IPOPT options and the same start: ``nlpsol`` deriving the derivatives itself with
+CasADi's AD on the MX graph ("casadi_ad"), and the same with ``expand=True`` (the graph
+expanded to SX first, "casadi_ad_expand"). Their build time includes our stage phase.
 """
 
 from __future__ import annotations
@@ -27,9 +32,9 @@ from _bench import arguments, median_time, progress, save  # noqa: E402
 
 import ocgroupoid as og  # noqa: E402
 from ocgroupoid.models.rigid_body import rigid_body  # noqa: E402
-from ocgroupoid.assembly import StageDerivatives  # noqa: E402
+from ocgroupoid.nlp.assembly import StageDerivatives, plain_nlp  # noqa: E402
 from ocgroupoid.solve import geodesic_guesses  # noqa: E402
-from ocgroupoid.transcribe import Transcription, nlpsol_options  # noqa: E402
+from ocgroupoid.nlp.transcription import Transcription, nlpsol_options  # noqa: E402
 
 
 def casadi_floor(tr: Transcription, repeats: int) -> dict[str, float]:
@@ -67,6 +72,60 @@ def casadi_floor(tr: Transcription, repeats: int) -> dict[str, float]:
     return {**out, "total": sum(out.values()), "derivative_entries": entries}
 
 
+BASELINES = {"casadi_ad": {}, "casadi_ad_expand": {"expand": True}}
+
+
+def baseline(tr: Transcription, extra: dict[str, object], x0: np.ndarray, p: np.ndarray,
+             repeats: int) -> dict[str, float]:
+    """Build (our stage phase + the plain NLP + nlpsol) and median solve of a baseline."""
+    fns = {k: tr.solver.get_function(k) for k in ("nlp_grad_f", "nlp_jac_g", "nlp_hess_l")}
+    opts = {k: v for k, v in nlpsol_options(None, fns).items() if k != "cache"}
+    t0 = time.perf_counter()
+    nlp = plain_nlp(tr.blocks, ca.MX.sym("x", tr.nx), ca.MX.sym("p", tr.np))
+    solver = ca.nlpsol("baseline", "ipopt", nlp, {**opts, **extra})
+    build = tr.build_phases["stages"] + time.perf_counter() - t0
+    solve, r = median_time(lambda: solver(x0=x0, p=p, lbg=0, ubg=0), repeats)
+    stats = solver.stats()
+    return {"build_seconds": build, "solve_seconds": solve, "cost": float(r["f"]),
+            "iterations": int(stats["iter_count"]), "status": str(stats["return_status"])}
+
+
+def plot(path: Path, Ns: list[int], rows: list[dict]) -> None:
+    """Three panels: our build and its phases; build against the baselines; IPOPT solve
+    against the baselines."""
+    by = {r["N"]: r for r in rows}
+    fig, ax = plt.subplots(1, 3, figsize=(14, 4.2))
+    ax[0].loglog(Ns, [r["build_seconds"] for r in rows], "o-", color="tab:blue", label="build")
+    for k, style in (("stages", "v--"), ("assembly", "^--"), ("nlpsol", "d--")):
+        ax[0].loglog(Ns, [r["build_phases_seconds"][k] for r in rows], style, ms=4, lw=0.8,
+                     label=f"  {k}")
+    floors = [r for r in rows if r["casadi_floor_seconds"]]
+    ax[0].loglog([r["N"] for r in floors], [r["casadi_floor_seconds"]["total"] for r in floors],
+                 "kx", ms=8, label="CasADi floor of any build")
+    ax[0].set_title("our build and its phases")
+    styles = {"ours": ("tab:blue", "o-"), "casadi_ad": ("tab:red", "s--"),
+              "casadi_ad_expand": ("tab:purple", "^--")}
+    for i, key in ((1, "build_seconds"), (2, "solve_seconds")):
+        ax[i].loglog(Ns, [r[key] for r in rows], styles["ours"][1], color=styles["ours"][0],
+                     label="ours (stage-wise derivatives)")
+        for name in BASELINES:
+            ax[i].loglog(Ns, [r["baselines"][name][key] for r in rows], styles[name][1],
+                         color=styles[name][0], ms=4, label=name)
+    ax[2].loglog(Ns, [by[Ns[len(Ns) // 2]]["solve_seconds"] * n / Ns[len(Ns) // 2] for n in Ns],
+                 "k:", label="linear in N")
+    ax[1].set_title("build: ours and CasADi's AD")
+    iters = sorted({r["iterations"] for r in rows})
+    ax[2].set_title(f"IPOPT solve (median; {'/'.join(map(str, iters))} iterations at every N)")
+    for a in ax:
+        a.set_xlabel("N")
+        a.set_ylabel("seconds")
+        a.grid(alpha=0.3, which="both")
+        a.legend(fontsize=7)
+    fig.suptitle("so3_rest_to_rest (Cayley, order2): time versus N")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+
+
 def main() -> None:
     args = arguments(__doc__.splitlines()[0])
     Ns = [16, 32, 64] if args.quick else [16, 32, 64, 128, 256, 512, 1024]
@@ -87,15 +146,27 @@ def main() -> None:
             bar.update(task, description=f"N={N}: solve x{repeats}")
             solve, raw = median_time(lambda: tr.solve(guess, p), repeats)
             floor = casadi_floor(tr, 3) if N in (Ns[0], Ns[-1]) else None
+            base = {}
+            for name, extra in BASELINES.items():
+                bar.update(task, description=f"N={N}: baseline {name}")
+                base[name] = baseline(tr, extra, tr.point(guess, p), p, repeats)
             rows.append({"N": N, "build_seconds": build, "build_phases_seconds": phases,
                          "casadi_floor_seconds": floor, "solve_seconds": solve,
-                         "iterations": raw.iterations, "status": raw.status, "cost": raw.cost})
+                         "iterations": raw.iterations, "status": raw.status, "cost": raw.cost,
+                         "baselines": base})
             bar.advance(task)
     by = {r["N"]: r for r in rows}
     ratios = {"build_1024_over_16": by[1024]["build_seconds"] / by[16]["build_seconds"]
               if 1024 in by else None,
               "solve_1024_over_64": by[1024]["solve_seconds"] / by[64]["solve_seconds"]
               if 1024 in by else None}
+    last_N = Ns[-1]
+    for name in BASELINES:  # how much the hand-written assembly saves, at the largest N
+        b = by[last_N]["baselines"][name]
+        ratios[f"{name}_build_over_ours_N{last_N}"] = b["build_seconds"] / \
+            by[last_N]["build_seconds"]
+        ratios[f"{name}_solve_over_ours_N{last_N}"] = b["solve_seconds"] / \
+            by[last_N]["solve_seconds"]
     if 1024 in by:  # where the growth is: stage graphs are built once, whatever N
         ratios.update({f"build_{k}_1024_over_16": by[1024]["build_phases_seconds"][k]
                        / by[16]["build_phases_seconds"][k] for k in tr.build_phases})
@@ -109,28 +180,7 @@ def main() -> None:
             "median_solve_ms_N512": by[512]["solve_seconds"] * 1e3 if 512 in by else None,
             "created": time.strftime("%Y-%m-%d %H:%M:%S")}
     path = save(args.out, "bench_so3", data)
-    fig, ax = plt.subplots(1, 2, figsize=(10, 3.8))
-    ax[0].loglog(Ns, [r["build_seconds"] for r in rows], "o-", label="build (compile)")
-    for k, style in (("stages", "v--"), ("assembly", "^--"), ("nlpsol", "d--")):
-        ax[0].loglog(Ns, [r["build_phases_seconds"][k] for r in rows], style, ms=4, lw=0.8,
-                     label=f"  build: {k}")
-    floors = [r for r in rows if r["casadi_floor_seconds"]]
-    ax[0].loglog([r["N"] for r in floors], [r["casadi_floor_seconds"]["total"] for r in floors],
-                 "kx", ms=8, label="CasADi floor of any build")
-    ax[0].loglog(Ns, [r["solve_seconds"] for r in rows], "s-", label="IPOPT solve (median)")
-    ax[0].loglog(Ns, [by[64]["solve_seconds"] * n / 64 for n in Ns], "k:", label="linear in N")
-    ax[0].set_xlabel("N")
-    ax[0].set_ylabel("seconds")
-    ax[0].legend(fontsize=7)
-    ax[0].grid(alpha=0.3, which="both")
-    ax[1].semilogx(Ns, [r["iterations"] for r in rows], "o-")
-    ax[1].set_xlabel("N")
-    ax[1].set_ylabel("IPOPT iterations")
-    ax[1].set_ylim(0, max(r["iterations"] for r in rows) + 2)
-    ax[1].grid(alpha=0.3)
-    fig.suptitle("so3_rest_to_rest: time and iterations versus N")
-    fig.tight_layout()
-    fig.savefig(args.out / "bench_so3.png", dpi=110)
+    plot(args.out / "bench_so3.png", Ns, rows)
     for r in rows:
         ph = "/".join(f"{v * 1e3:.1f}" for v in r["build_phases_seconds"].values())
         print(f"N={r['N']:5d}  build {r['build_seconds'] * 1e3:7.1f} ms (stages/assembly/nlpsol "
@@ -141,6 +191,11 @@ def main() -> None:
         print(f"N={r['N']:5d}  CasADi floor {fl['total'] * 1e3:6.1f} ms: " + ", ".join(
             f"{k} {fl[k] * 1e3:.2f}" for k in ("nlpsol", "map", "sparsity", "index"))
             + f" ms ({fl['derivative_entries']} derivative entries)")
+    for r in rows:
+        print(f"N={r['N']:5d}  baselines: " + "; ".join(
+            f"{k} build {b['build_seconds'] * 1e3:.1f} ms, solve {b['solve_seconds'] * 1e3:.2f} ms"
+            f" ({b['iterations']} it, |dJ| {abs(b['cost'] - r['cost']):.1e})"
+            for k, b in r["baselines"].items()))
     print(f"ratios: {ratios}; written {path}")
 
 

@@ -116,12 +116,35 @@ def test_plot_writes_a_png(tmp_path) -> None:
     assert r.exit_code == 2 and "not a solution file" in r.output
 
 
-@pytest.mark.parametrize("command", ["solve", "check", "plot", "list"])
-def test_every_command_has_help(command: str) -> None:
-    r = runner.invoke(app, [command, "--help"])
-    assert r.exit_code == 0 and "Usage" in r.output
+HELP = {  # each command's help names what it does and every option it takes
+    "solve": ["problem file", "--set", "--out", "--plot", "--quiet"],
+    "check": ["no solve", "--set"],
+    "plot": ["solution JSON", "--out"],
+    "list": ["models", "schemes"],
+    "export-c": ["C project", "--out", "--build", "--set", "--cflags"],
+}
 
 
-def test_list_names_the_models_and_problem_files() -> None:
-    r = runner.invoke(app, ["list"])
-    assert r.exit_code == 0 and "rigid_body" in r.output
+@pytest.mark.parametrize("command", list(HELP))
+def test_every_command_documents_its_options(command: str) -> None:
+    r = runner.invoke(app, [command, "--help"], terminal_width=200)
+    assert r.exit_code == 0, r.output
+    text = " ".join(r.output.split())
+    for word in HELP[command]:
+        assert word in text, (command, word)
+
+
+def test_top_level_help_lists_every_command() -> None:
+    r = runner.invoke(app, ["--help"], terminal_width=200)
+    assert r.exit_code == 0 and all(c in r.output for c in HELP)
+
+
+def test_list_names_the_models_schemes_and_problem_files(monkeypatch) -> None:
+    from ocgroupoid.models import MODELS
+    from ocgroupoid.nlp.schemes import SCHEME_NAMES
+
+    monkeypatch.chdir(ROOT)
+    r = runner.invoke(app, ["list"], terminal_width=200)
+    assert r.exit_code == 0
+    for name in [*MODELS, *SCHEME_NAMES, "cayley", "first_order", *(p.name for p in PROBLEMS)]:
+        assert name in r.output, name

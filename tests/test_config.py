@@ -9,10 +9,10 @@ import pytest
 from typer.testing import CliRunner
 
 import ocgroupoid as og
-from ocgroupoid import config
+from ocgroupoid import files
 from ocgroupoid.cli import app
 from ocgroupoid.models.rigid_body import rigid_body
-from ocgroupoid.solution import write_atomic
+from ocgroupoid.solve.solution import write_atomic
 
 ROOT = Path(__file__).resolve().parent.parent
 runner = CliRunner()
@@ -124,8 +124,8 @@ def test_forbidden_expressions_are_named(tmp_path, key: str, value: str, expecte
 
 
 def test_custom_rigid_body_reproduces_the_built_in() -> None:
-    cfg = config.load(ROOT / "problems" / "custom_rigid_body.yaml")
-    custom = og.solve(config.build(cfg), N=64, replay=False)
+    cfg = files.load(ROOT / "problems" / "custom_rigid_body.yaml")
+    custom = og.solve(files.build(cfg), N=64, replay=False)
     builtin = og.solve(rigid_body(), N=64, replay=False)
     assert custom.success and builtin.success
     assert abs(custom.cost - builtin.cost) <= 1e-10
@@ -164,10 +164,10 @@ def test_atomic_write_keeps_the_old_file_when_interrupted(tmp_path, monkeypatch)
 
 
 def test_set_overrides_lists_and_nested_keys(tmp_path) -> None:
-    cfg = config.load(ROOT / "problems" / "so3_rest_to_rest.yaml",
+    cfg = files.load(ROOT / "problems" / "so3_rest_to_rest.yaml",
                       ["parameters.inertia=[2, 1.5, 0.8]", "solver.ipopt.max_iter=50",
                        "final.Omega=[0, 0, null]", "name=renamed"])
     assert cfg.parameters.inertia == [2.0, 1.5, 0.8]
     assert cfg.file.solver.ipopt["max_iter"] == 50
     assert cfg.final.Omega == [0.0, 0.0, None]
-    assert config.build(cfg).name == "renamed"
+    assert files.build(cfg).name == "renamed"

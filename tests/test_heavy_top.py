@@ -17,11 +17,12 @@ from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 import ocgroupoid as og
+from ocgroupoid.nlp import Kind
 from ocgroupoid.cli import app
 from ocgroupoid.errors import BoundaryError
 from ocgroupoid.models.heavy_top import discrete_casimir, heavy_top
 from ocgroupoid.solve import interpolate
-from ocgroupoid.transcribe import Guess
+from ocgroupoid.nlp import Guess
 
 NS = [32, 64, 128, 256]
 FINE = [512, 1024]
@@ -149,7 +150,7 @@ def test_lie_poisson_casimir_identity_for_any_controls(seed: int, mgl: float, N:
     p = tr.pack()
     xi = np.random.default_rng(seed).normal(scale=2.0, size=(N, 5))
     x = tr.point(Guess("random", xi), p)
-    Phi = np.asarray(tr.g_fun(x, p)).ravel()[tr.phi_rows()]  # (3, N + 1), h-scaled
+    Phi = np.asarray(tr.g_fun(x, p)).ravel()[tr.rows(Kind.PATH)]  # (3, N + 1), h-scaled
     Gamma = tr.unpack(x, p)["s"][:, :3]
     C = discrete_casimir(tr, x, p)
     np.testing.assert_allclose(np.einsum("ik,ki->k", Phi, Gamma), np.diff(C),

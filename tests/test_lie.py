@@ -186,3 +186,20 @@ def test_rn_group_laws(a: np.ndarray, b: np.ndarray) -> None:
     assert np.allclose(G.compose(a, G.inverse(a)), G.identity())
     assert np.allclose(ret.tau(ret.tau_inv(b)), b)
     assert np.allclose(ret.dtau(a) @ ret.dtau_inv(a), np.eye(4))
+
+
+GROUPS = [SO3, Rn(4)]
+every_group = pytest.mark.parametrize("G", GROUPS, ids=lambda G: G.name)
+
+
+@every_group
+@given(seed=st.integers(0, 2**32 - 1))
+def test_deduced_operations(G, seed: int) -> None:
+    """between, rplus and rminus, written once on the primitives (manif's deduced section):
+    a between(a, b) = b and rplus(b, rminus(a, b)) = a; samples lie on the group."""
+    rng = np.random.default_rng(seed)
+    a, b = G.sample(rng), G.sample(rng)
+    assert G.distance_from_group(a) <= 1e-12
+    assert np.allclose(G.compose(a, G.between(a, b)), b, atol=1e-12)
+    assert np.allclose(G.rplus(b, G.rminus(a, b)), a, atol=1e-9)
+    assert np.allclose(G.rminus(a, a), 0, atol=1e-12)

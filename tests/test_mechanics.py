@@ -8,8 +8,8 @@ import pytest
 
 from ocgroupoid.errors import ConfigError, DimensionError
 from ocgroupoid.groupoid import Groupoid, LieGroupFactor, Pair, SphereAction
-from ocgroupoid.mechanics import euler_lagrange, split
-from ocgroupoid.problem import Problem
+from ocgroupoid.model.mechanics import euler_lagrange, split
+from ocgroupoid.model.problem import Problem
 
 
 def test_rigid_body_gives_euler_equations() -> None:

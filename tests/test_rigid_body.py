@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 
 import ocgroupoid as og
-from ocgroupoid.discretize import Discretization, Stages
 from ocgroupoid.errors import BoundaryError, ConfigError
 from ocgroupoid.models.rigid_body import rigid_body
-from ocgroupoid.simulate import DiscreteFlow
+from ocgroupoid.nlp import make_scheme
+from ocgroupoid.solve.simulate import DiscreteFlow
 
 NS = [16, 32, 64, 128, 256, 512]
 
@@ -30,7 +30,7 @@ def test_forward_flow_stays_on_so3_for_ten_thousand_steps() -> None:
     """Zero control, no target: R^T R = I to 1e-12 and the quadratic invariants conserved."""
     pb = rigid_body()
     N, T = 10_000, 100.0
-    flow = DiscreteFlow(Stages(pb, Discretization(N)))
+    flow = DiscreteFlow(make_scheme("order2", pb, N, "cayley", "midpoint"))
     I = np.array([1.0, 2.0, 3.0])
     s, xi = flow.run(np.array([1.0, 0, 0, 0]), np.array([1.0, 0.5, -0.3]), np.zeros((N, 3)),
                      T, I)
@@ -128,11 +128,11 @@ def test_terminal_condition_has_no_root_at_a_half_turn() -> None:
     pb = rigid_body()
     tr = og.compile(pb, N=16).transcription
     p = tr.pack()
-    RT = pb.groupoid.factors[0].matrix(p[tr.p_layout["end"]])
+    RT = pb.groupoid.factors[0].matrix(p[tr.layout.p_slices["end"]])
     fake = pb.groupoid.factors[0].parse_state(RT @ og.so3.from_axis_angle([1, -1, 2], np.pi))
     assert np.allclose(og.so3.vee_skew(RT.T @ pb.groupoid.factors[0].matrix(fake)), 0, atol=1e-12)
     with np.errstate(divide="ignore"):
-        c = np.asarray(tr.stages.chart(fake, p[tr.p_layout["end"]])).ravel()
+        c = np.asarray(tr.scheme.stages.chart(fake, p[tr.layout.p_slices["end"]])).ravel()
     assert np.min(np.abs(c)) > 1e6
 
 

@@ -15,11 +15,11 @@ import numpy as np
 
 from ..errors import ConfigError
 from ..lie import so3
-from ..lie._backend import dual, is_symbolic
+from ..lie._backend import dual, is_symbolic, safe_if
 from ..lie.group import Array
 from ..lie.retraction import Retraction
 from ..lie.so3 import SO3
-from .base import Factor
+from .base import BoundaryMask, Factor, Labelled
 
 
 def _cross(a: Array, b: Array) -> Array:
@@ -66,6 +66,8 @@ class SphereAction(Factor):
     manifold = "S^2"
     base_size = 3
     target_size = 9  # Gamma_T and an orthonormal basis (t1, t2) of its tangent plane
+    value_kind = "direction"
+    value_meaning = "unit 3-vector (|v| = 1 to 1e-6)"
 
     def __init__(self, state: str = "Gamma", velocity: str = "Omega") -> None:
         self.state, self.velocity = state, velocity
@@ -85,10 +87,19 @@ class SphereAction(Factor):
         Two equations, zero only at Gamma_T; the antipode is a pole."""
         return stereographic(s, target)
 
-    def pack_target(self, value: Any) -> np.ndarray:
-        g = self.parse_state(value)
-        t1, t2 = tangent_basis(g)
-        return np.concatenate([g, t1, t2])
+    def rplus(self, s: Array, v: Array) -> Array:
+        """The direction s rotated by the rotation vector v: ``exp(hat(v)) s``."""
+        return so3.exp(v) @ s
+
+    def rminus(self, s: Array, goal: Array) -> Array:
+        """The rotation vector, orthogonal to both, that turns the goal into s/|s|."""
+        return _great_circle(goal, s)
+
+    def pack_target(self, x: Array) -> Array:
+        return _direction_target(x)
+
+    def invalid(self, x: Array) -> Array:
+        return ca.fabs(ca.norm_2(x) - 1) > 1e-6
 
     def anchor(self, q: Array, y: Array) -> Array:
         return _cross(q, y)
@@ -98,6 +109,21 @@ class SphereAction(Factor):
 
     def state_rate(self, s: Array, y: Array) -> Array:
         return _cross(s, y)
+
+    def guesses(self, ret: Retraction, start: Array, end: Array, V0: Array, VN: Array,
+                T: Array, N: int, mask: BoundaryMask) -> Labelled:
+        """Great circle from Gamma_0 to Gamma_T, both ways round; rest when Gamma_T is free.
+        ``W^T`` turns Gamma by 1/N of the arc per step."""
+        if not mask.end_state.all():
+            return [("rest", type(start).zeros(3, N))]
+        v = _great_circle(start[:3], end[:3])
+        angle = ca.norm_2(v)
+        turns = angle > 1e-12
+        axis = ca.if_else(turns, v / safe_if(turns, angle, 1.0), tangent_basis(start[:3])[0])
+        h = T / N
+        return [(name, ca.repmat(ret.tau_inv_quat(so3.quat_exp(-axis * phi / N)) / h, 1, N))
+                for name, phi in (("great circle", angle),
+                                  ("great circle, long way", angle - 2 * np.pi))]
 
     def parse_state(self, value: Any) -> np.ndarray:
         v = np.asarray(value, dtype=float).reshape(-1)
@@ -113,20 +139,9 @@ class SphereAction(Factor):
     def distance(self, s: np.ndarray) -> float:
         return abs(float(np.linalg.norm(s)) - 1.0)
 
-    def geodesics(self, s0: np.ndarray, sT: np.ndarray | None, T: float, N: int,
-                  ret: Retraction) -> list[tuple[str, np.ndarray]]:
-        """Great circle from Gamma_0 to Gamma_T, both ways round."""
-        if sT is None:
-            return [("rest", np.zeros((N, 3)))]
-        axis = np.cross(s0, sT)
-        sin, cos = float(np.linalg.norm(axis)), float(np.dot(s0, sT))
-        axis = axis / sin if sin > 1e-12 else tangent_basis(s0)[0]
-        angle = float(np.arctan2(sin, cos))
-        out = []
-        for name, phi in (("great circle", angle), ("great circle, long way", angle - 2 * np.pi)):
-            W = so3.exp(-axis * phi / N)  # W^T rotates Gamma by phi/N about the axis
-            out.append((name, np.tile(ret.tau_inv(W) / (T / N), (N, 1))))
-        return out
+    def sample_state(self, rng: np.random.Generator) -> np.ndarray:
+        v = rng.normal(size=3)
+        return v / np.linalg.norm(v)
 
     # -- groupoid structure maps --------------------------------------------------------
 
@@ -148,3 +163,21 @@ class SphereAction(Factor):
     def element(self, s: np.ndarray, w: Any) -> tuple[np.ndarray, np.ndarray]:
         return (np.asarray(s), np.asarray(w))
 
+
+@dual
+def _great_circle(a: Array, b: Array) -> Array:
+    """The rotation vector ``angle * (a x b)/|a x b|`` that turns the direction a into b/|b|
+    (zero when they agree; at the antipode the axis is the first tangent of a)."""
+    b = b / ca.norm_2(b)
+    axis = ca.cross(a, b)
+    sin, cos = ca.norm_2(axis), ca.dot(a, b)
+    turns = sin > 1e-12
+    axis = ca.if_else(turns, axis / safe_if(turns, sin, 1.0), tangent_basis(a)[0])
+    return ca.atan2(sin, cos) * axis
+
+
+@dual
+def _direction_target(x: Array) -> Array:
+    n = ca.norm_2(x)
+    g = x / safe_if(n > 0, n, 1.0)
+    return ca.vertcat(g, *tangent_basis(g))

@@ -8,21 +8,38 @@ algebra velocities ``xi_k`` on the intervals, linked by the step
 i.e. the groupoid element between nodes k and k+1 is the composable pair it generates.
 A factor also knows its structure maps (source, target, identity, inverse, multiplication),
 its Lie algebroid (anchor and bracket, for the Euler-Lagrange operator), the admissible
-variations at a node (seed 000, eq. 11), and charts for boundary conditions.
+variations at a node (seed 000, eq. 11), charts for boundary conditions, and everything
+else that differs between factors: the geodesic guesses, ``rplus``/``rminus`` (manif's
+vocabulary) and the terminal error, random samples, how a state is shown and how a boundary
+value is packed into the NLP parameters. No code outside this package asks which factor it
+holds.
 """
 
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from dataclasses import dataclass
 from typing import Any, Literal
 
+import casadi as ca
 import numpy as np
 
+from ..lie._backend import is_symbolic
 from ..lie.group import Array, LieGroup
 from ..lie.retraction import Retraction
 
 Side = Literal["right", "left"]
 Element = Any
+Labelled = list[tuple[str, Any]]
+
+
+@dataclass(frozen=True)
+class BoundaryMask:
+    """Which boundary components of one factor are prescribed (True), for its guesses."""
+
+    end_state: np.ndarray  # one flag per chart row (state_dim)
+    start_velocity: np.ndarray  # one flag per velocity component
+    end_velocity: np.ndarray
 
 
 class Factor(ABC):
@@ -38,6 +55,8 @@ class Factor(ABC):
     base_size: int  # coordinates of the base the Lagrangian sees (0 over a point)
     target_size: int  # length of the packed boundary value of a state (state + chart data)
     componentwise: bool = False  # True when single state components may be left free
+    value_kind: str  # how a parameter file writes the state: rotation, direction, vector
+    value_meaning: str  # one line for parameter-file documentation
 
     @property
     def algebra_dim(self) -> int:
@@ -77,13 +96,38 @@ class Factor(ABC):
         """Local coordinates (length ``state_dim``) of ``s`` around the packed target;
         zero exactly at the target, with no spurious root (e.g. at a rotation of pi)."""
 
+    # -- manifold operations (manif's vocabulary) --------------------------------------
+
     @abstractmethod
-    def pack_target(self, value: Any) -> np.ndarray:
-        """Numeric state value -> the packed vector the NLP parameters hold."""
+    def rplus(self, s: Array, v: Array) -> Array:
+        """The state ``s`` moved by the tangent vector v (length ``algebra_dim``)."""
+
+    @abstractmethod
+    def rminus(self, s: Array, goal: Array) -> Array:
+        """The tangent vector v with ``rplus(goal, v) = s``; ``|v|`` is their distance."""
+
+    def terminal_error(self, s: Array, goal: Array, mask: np.ndarray) -> float:
+        """Distance of a numeric state from a goal over the prescribed components: the angle
+        for rotations and directions, the Euclidean norm over ``mask`` on R^n."""
+        v = np.asarray(self.rminus(np.asarray(s, dtype=float), np.asarray(goal, dtype=float)),
+                       dtype=float).ravel()
+        return float(np.linalg.norm(v[mask] if self.componentwise else v))
+
+    # -- NLP parameters: a state value and its packed target ---------------------------
 
     def state_of_target(self, packed: Array) -> Array:
         """The flattened state inside a packed target."""
         return packed[: self.state_size]
+
+    @abstractmethod
+    def pack_target(self, x: Array) -> Array:
+        """A state value (quaternion, unit vector, vector; numeric or a graph) -> the packed
+        target the NLP parameters hold: the state normalised, plus its chart data."""
+
+    def invalid(self, x: Array) -> Array:
+        """1 where a state value cannot be packed (a zero quaternion, a direction that is
+        not of unit length), else 0: how exported C flags bad parameter files."""
+        return ca.DM(0) if not is_symbolic(x) else type(x)(0)
 
     # -- Lie algebroid (continuous mechanics) --------------------------------------------
 
@@ -99,7 +143,16 @@ class Factor(ABC):
     def state_rate(self, s: Array, y: Array) -> Array:
         """ds/dt of the flattened state for the velocity y (reconstruction equation)."""
 
-    # -- numeric helpers ---------------------------------------------------------------
+    # -- guesses ---------------------------------------------------------------------
+
+    @abstractmethod
+    def guesses(self, ret: Retraction, start: Array, end: Array, V0: Array, VN: Array,
+                T: Array, N: int, mask: BoundaryMask) -> Labelled:
+        """Labelled velocity guesses, each ``dim x N`` (one column per interval), as graphs
+        of the packed start and end targets, the end velocities and T; the preferred first.
+        Written once: Python evaluates them, exported C runs the same graph."""
+
+    # -- users' view of a state ----------------------------------------------------------
 
     @abstractmethod
     def parse_state(self, value: Any) -> np.ndarray:
@@ -109,14 +162,29 @@ class Factor(ABC):
     def distance(self, s: np.ndarray) -> float:
         """Distance of a flattened numeric state from the manifold."""
 
-    @abstractmethod
-    def geodesics(self, s0: np.ndarray, sT: np.ndarray | None, T: float, N: int,
-                  ret: Retraction) -> list[tuple[str, np.ndarray]]:
-        """Labelled velocity guesses (N x dim) that join s0 to sT, shortest first."""
+    @property
+    def shown_shape(self) -> tuple[int, ...]:
+        """Shape of a state as users see it (a rotation: its 3 x 3 matrix)."""
+        return (self.state_size,)
 
-    def format_state(self, s: np.ndarray) -> Any:
-        """A flattened numeric state as the JSON-friendly value users see."""
-        return np.asarray(s, dtype=float).tolist()
+    def shown(self, s: Array) -> Array:
+        """A state as users see it, flattened row-major (numeric or a graph)."""
+        return s
+
+    # -- random samples (property tests, generic points) --------------------------------
+
+    @abstractmethod
+    def sample_state(self, rng: np.random.Generator) -> np.ndarray:
+        """A random flattened node state."""
+
+    def sample_base(self, rng: np.random.Generator) -> Any:
+        """A random point of the base, as the structure maps see it (None over a point)."""
+        return self.sample_state(rng)
+
+    def sample_element(self, rng: np.random.Generator, source: Any = None) -> Element:
+        """A random groupoid element, starting at ``source`` when given."""
+        s = self.sample_base(rng) if source is None else source
+        return self.element(s, self.group.sample(rng))
 
     # -- groupoid structure maps (on numeric elements) -----------------------------------
 
@@ -140,9 +208,15 @@ class Factor(ABC):
     def multiply(self, g: Element, k: Element) -> Element:
         """m(g, k), defined when target(g) = source(k)."""
 
-    def element(self, s: np.ndarray, w: Any) -> Element:
+    def element(self, s: Any, w: Any) -> Element:
         """The groupoid element carrying node state ``s`` by ``w`` to the next node."""
         return w
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self.state}, {self.velocity})"
+
+
+def zeros_like(x: Array, rows: int, cols: int) -> Array:
+    """A rows x cols zero matrix of the same kind (MX, SX, DM) as x."""
+    return type(x).zeros(rows, cols) if is_symbolic(x) or isinstance(x, ca.DM) \
+        else ca.DM.zeros(rows, cols)

@@ -17,7 +17,7 @@ from ..errors import ConfigError
 from ..lie.group import Array
 from ..lie.retraction import Retraction
 from ..lie.rn import Rn
-from .base import Factor
+from .base import BoundaryMask, Factor, Labelled
 
 
 def hermite_basis(N: int) -> np.ndarray:
@@ -28,11 +28,18 @@ def hermite_basis(N: int) -> np.ndarray:
                       t**3 - t**2])
 
 
+def _pick(flags: np.ndarray, given: Array, other: Array) -> Array:
+    """``given[i]`` where ``flags[i]``, else ``other[i]`` (flags are structural)."""
+    return ca.vertcat(*[given[i] if on else other[i] for i, on in enumerate(flags)])
+
+
 class Pair(Factor):
     """R^n x R^n => R^n with positions ``state`` and velocities ``velocity``."""
 
     side = "right"
     componentwise = True
+    value_kind = "vector"
+    value_meaning = "vector (one number per component)"
 
     def __init__(self, n: int, state: str = "q", velocity: str = "v") -> None:
         self.group = Rn(n)
@@ -52,8 +59,14 @@ class Pair(Factor):
     def chart(self, s: Array, target: Array) -> Array:
         return s - target
 
-    def pack_target(self, value: Any) -> np.ndarray:
-        return self.parse_state(value)
+    def rplus(self, s: Array, v: Array) -> Array:
+        return s + v
+
+    def rminus(self, s: Array, goal: Array) -> Array:
+        return s - goal
+
+    def pack_target(self, x: Array) -> Array:
+        return x
 
     def anchor(self, q: Array, y: Array) -> Array:
         return y
@@ -64,6 +77,20 @@ class Pair(Factor):
     def state_rate(self, s: Array, y: Array) -> Array:
         return y
 
+    def guesses(self, ret: Retraction, start: Array, end: Array, V0: Array, VN: Array,
+                T: Array, N: int, mask: BoundaryMask) -> Labelled:
+        """The cubic through the prescribed end positions and velocities, as difference
+        quotients on the nodes. A free end position is reached by moving with the initial
+        velocity (or resting); a free end velocity is the mean velocity."""
+        n = self.group.dim
+        zero = type(start).zeros(n, 1)
+        goal = _pick(mask.end_state, end, start + T * _pick(mask.start_velocity, V0, zero))
+        mean = (goal - start) / T
+        v0 = _pick(mask.start_velocity, V0, mean)
+        vT = _pick(mask.end_velocity, VN, mean)
+        nodes = ca.mtimes(ca.DM(hermite_basis(N)), ca.horzcat(start, T * v0, goal, T * vT).T)
+        return [("cubic", ((nodes[1:, :] - nodes[:-1, :]) / (T / N)).T)]
+
     def parse_state(self, value: Any) -> np.ndarray:
         v = np.asarray(value, dtype=float).reshape(-1)
         if v.shape != (self.group.dim,):
@@ -73,17 +100,8 @@ class Pair(Factor):
     def distance(self, s: np.ndarray) -> float:
         return 0.0
 
-    def geodesics(self, s0: np.ndarray, sT: np.ndarray | None, T: float, N: int,
-                  ret: Retraction) -> list[tuple[str, np.ndarray]]:
-        """The straight segment (or rest, when the end is free)."""
-        end = s0 if sT is None else sT
-        return [("straight", np.tile((end - s0) / T, (N, 1)))]
-
-    def hermite(self, s0: np.ndarray, v0: np.ndarray, sT: np.ndarray, vT: np.ndarray,
-                T: float, N: int) -> np.ndarray:
-        """Velocities (N x n) of the cubic through (s0, v0) and (sT, vT), as differences."""
-        q = hermite_basis(N) @ np.vstack([s0, T * v0, sT, T * vT])
-        return np.diff(q, axis=0) / (T / N)
+    def sample_state(self, rng: np.random.Generator) -> np.ndarray:
+        return rng.normal(size=self.group.dim)
 
     # -- groupoid structure maps --------------------------------------------------------
 

@@ -85,10 +85,27 @@ class Groupoid:
                 return i, f
         raise ConfigError(f"no velocity called {name!r}; velocities are {self.velocity_names}")
 
-    def base(self, s: ca.SX) -> ca.SX:
+    def base(self, s: Any) -> Any:
         """Base coordinates q (what the Lagrangian sees) of a product node state s."""
         parts = [f.base(s[ss]) for f, ss in zip(self.factors, self.state_layout.slices)]
-        return ca.vertcat(*parts) if self.base_size else ca.SX(0, 1)
+        return ca.vertcat(*parts) if self.base_size else type(s)(0, 1)
+
+    def step(self, s: Any, retractions: Sequence[Any], a: Any) -> Any:
+        """The next product state: every factor stepped by its part of the increment a."""
+        return ca.vertcat(*[f.step(s[ss], r, a[vs]) for f, r, ss, vs in
+                            zip(self.factors, retractions, self.state_layout.slices,
+                                self.velocity_layout.slices)])
+
+    def state_rate(self, s: Any, y: Any) -> Any:
+        """ds/dt of a product state for the velocity y (the reconstruction equations)."""
+        return ca.vertcat(*[f.state_rate(s[ss], y[vs]) for f, ss, vs in
+                            zip(self.factors, self.state_layout.slices,
+                                self.velocity_layout.slices)])
+
+    def shown(self, s: Any) -> Any:
+        """A product state as users see it, factor by factor, flattened."""
+        return ca.vertcat(*[f.shown(s[ss]) for f, ss in
+                            zip(self.factors, self.state_layout.slices)])
 
     @property
     def state_names(self) -> list[str]:

@@ -21,11 +21,11 @@ import numpy as np
 
 from ..errors import ConfigError, SingularityError
 from . import so3
-from ._backend import dual, is_symbolic, safe_if, to_numpy
+from ._backend import dual, is_symbolic, safe_if
 from .group import Array, LieGroup
 from .rn import Rn
 
-_RETRACTION_NAMES = ("cayley", "exp", "first_order")
+RETRACTION_NAMES = ("cayley", "exp", "first_order")
 
 
 class Retraction(ABC):
@@ -33,6 +33,8 @@ class Retraction(ABC):
 
     name: str
     group: LieGroup
+    #: the step norm |a| near which the retraction degenerates (quoted by hints)
+    step_limit: float = float("inf")
 
     @abstractmethod
     def tau(self, a: Array) -> Array:
@@ -44,6 +46,10 @@ class Retraction(ABC):
 
     def tau_quat(self, a: Array) -> Array:
         """The unit quaternion (w, x, y, z) of tau(a), for groups that have one (SO(3))."""
+        raise NotImplementedError(f"{self.name} on {self.group.name} has no quaternion form")
+
+    def tau_inv_quat(self, q: Array) -> Array:
+        """``tau_inv`` of the rotation of a unit quaternion (either sign), on graphs too."""
         raise NotImplementedError(f"{self.name} on {self.group.name} has no quaternion form")
 
     @abstractmethod
@@ -82,6 +88,11 @@ def _cay_quat(a: Array) -> Array:
 
 
 @dual
+def _cay_inv_quat(q: Array) -> Array:
+    return 2 * q[1:4] / q[0]
+
+
+@dual
 def _cay_inv(R: Array) -> Array:
     return 2 * so3.vee_skew(R) * 2 / (1 + ca.trace(R))
 
@@ -103,6 +114,7 @@ class Cayley(Retraction):
 
     name = "cayley"
     group = so3.SO3
+    step_limit = float(np.pi)
 
     def tau(self, a: Array) -> Array:
         return cay(a)
@@ -122,6 +134,10 @@ class Cayley(Retraction):
         """``(1, a/2)/sqrt(1 + |a|^2/4)``."""
         return _cay_quat(a)
 
+    def tau_inv_quat(self, q: Array) -> Array:
+        """``2 q_v / q_w``."""
+        return _cay_inv_quat(q)
+
     def dtau(self, a: Array) -> Array:
         return dcay(a)
 
@@ -129,22 +145,12 @@ class Cayley(Retraction):
         return dcay_inv(a)
 
 
-@dual
-def _exp_quat(a: Array) -> Array:
-    x2 = ca.dot(a, a) / 4  # (angle/2)^2
-    small = x2 < 1e-2
-    safe = safe_if(small, 1.0, x2)
-    x = ca.sqrt(safe)
-    sinc = safe_if(small, 1 - x2 / 6 + x2**2 / 120 - x2**3 / 5040 + x2**4 / 362880,
-                   ca.sin(x) / x)
-    return ca.vertcat(ca.cos(ca.sqrt(x2)), sinc * a / 2)
-
-
 class Exp(Retraction):
     """The exponential map; ``dtau`` is the left Jacobian of SO(3)."""
 
     name = "exp"
     group = so3.SO3
+    step_limit = float(np.pi)
 
     def tau(self, a: Array) -> Array:
         return so3.exp(a)
@@ -154,7 +160,10 @@ class Exp(Retraction):
 
     def tau_quat(self, a: Array) -> Array:
         """``(cos(t/2), sin(t/2) a/t)``, t = |a|."""
-        return _exp_quat(a)
+        return so3.quat_exp(a)
+
+    def tau_inv_quat(self, q: Array) -> Array:
+        return so3.quat_log(q)
 
     def dtau(self, a: Array) -> Array:
         return so3.dexp(a)
@@ -191,6 +200,11 @@ def _first_order_quat(a: Array) -> Array:
 
 
 @dual
+def _first_order_inv_quat(q: Array) -> Array:
+    return 2 * q[0] * q[1:4] / ca.dot(q, q)
+
+
+@dual
 def _first_order_dtau(a: Array) -> Array:
     s, t = _asin_ratio(ca.dot(a, a))
     return ca.mtimes(so3.dexp(s * a), s * ca.DM.eye(3) + t * ca.mtimes(a, a.T))
@@ -214,6 +228,7 @@ class FirstOrder(Retraction):
 
     name = "first_order"
     group = so3.SO3
+    step_limit = float(np.pi / 2)
 
     def tau(self, a: Array) -> Array:
         if not is_symbolic(a) and float(np.dot(np.ravel(a), np.ravel(a))) >= 1.0:
@@ -236,6 +251,10 @@ class FirstOrder(Retraction):
     def tau_quat(self, a: Array) -> Array:
         """``(w, a/(2w))`` with ``w = cos(angle/2) = sqrt((1 + sqrt(1 - |a|^2))/2)``."""
         return _first_order_quat(a)
+
+    def tau_inv_quat(self, q: Array) -> Array:
+        """``vee_skew(R(q)) = 2 q_w q_v / |q|^2`` (sin(angle) times the axis)."""
+        return _first_order_inv_quat(q)
 
     def dtau(self, a: Array) -> Array:
         return _first_order_dtau(a)
@@ -273,9 +292,9 @@ def retraction(name: str, group: LieGroup) -> Retraction:
 
     On R^n all three coincide with the translation.
     """
-    if name not in _RETRACTION_NAMES:
+    if name not in RETRACTION_NAMES:
         raise ConfigError(
-            f"unknown retraction {name!r}; choose one of {', '.join(_RETRACTION_NAMES)}"
+            f"unknown retraction {name!r}; choose one of {', '.join(RETRACTION_NAMES)}"
         )
     if isinstance(group, Rn):
         return Translation(group)
@@ -284,6 +303,5 @@ def retraction(name: str, group: LieGroup) -> Retraction:
     return {"cayley": Cayley, "exp": Exp, "first_order": FirstOrder}[name]()
 
 
-RETRACTION_NAMES = _RETRACTION_NAMES
 __all__ = ["Retraction", "Cayley", "Exp", "FirstOrder", "Translation", "retraction", "cay",
-           "dcay", "dcay_inv", "RETRACTION_NAMES", "to_numpy"]
+           "dcay", "dcay_inv", "RETRACTION_NAMES"]

@@ -15,7 +15,7 @@ class Rn(LieGroup):
     def __init__(self, n: int) -> None:
         if n < 1:
             raise ValueError(f"R^n needs n >= 1, got {n}")
-        self.dim = self.size = n
+        self.dim = n
         self.name = f"R{n}"
 
     def identity(self) -> np.ndarray:
@@ -39,14 +39,11 @@ class Rn(LieGroup):
     def ad(self, x: Array) -> Array:
         return ca.DM.zeros(self.dim, self.dim) if is_symbolic(x) else np.zeros((self.dim,) * 2)
 
-    def flatten(self, g: Array) -> Array:
-        return g if is_symbolic(g) else np.asarray(g, dtype=float).reshape(self.dim)
-
-    def unflatten(self, v: Array) -> Array:
-        return self.flatten(v)
-
     def distance_from_group(self, g: Array) -> float:
         return 0.0
+
+    def sample(self, rng: np.random.Generator) -> np.ndarray:
+        return rng.normal(size=self.dim)
 
     def __eq__(self, other: object) -> bool:
         return isinstance(other, Rn) and other.dim == self.dim

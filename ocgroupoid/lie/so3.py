@@ -7,12 +7,13 @@ Taylor branch built from a guarded argument, so neither value nor derivative is 
 
 from __future__ import annotations
 
+import difflib
 from typing import Any, Sequence
 
 import casadi as ca
 import numpy as np
 
-from ..errors import ConfigError, SingularityError
+from ..errors import ConfigError
 from ._backend import dual, is_symbolic, safe_if, to_numpy
 from .group import Array, LieGroup
 
@@ -140,6 +141,26 @@ def quat_multiply(p: Array, q: Array) -> Array:
 
 
 @dual
+def quat_exp(a: Array) -> Array:
+    """Unit quaternion of exp(hat(a)): ``(cos(t/2), sin(t/2) a/t)``, t = |a|; the Taylor
+    branch keeps value and derivatives finite at a = 0."""
+    x2 = ca.dot(a, a) / 4  # (angle/2)^2
+    small = x2 < 1e-2
+    safe = safe_if(small, 1.0, x2)
+    x = ca.sqrt(safe)
+    sinc = safe_if(small, 1 - x2 / 6 + x2**2 / 120 - x2**3 / 5040 + x2**4 / 362880,
+                   ca.sin(x) / x)
+    cos = safe_if(small, 1 - x2 / 2 + x2**2 / 24 - x2**3 / 720 + x2**4 / 40320, ca.cos(x))
+    return ca.vertcat(cos, sinc * a / 2)
+
+
+@dual
+def quat_conjugate(q: Array) -> Array:
+    """q^* = (w, -v): the inverse of a unit quaternion."""
+    return ca.vertcat(q[0], -q[1:4])
+
+
+@dual
 def quat_log(q: Array) -> Array:
     """Rotation vector (angle in [0, pi]) of a quaternion: ``2 atan2(|v|, w) v/|v|`` after
     normalising and choosing w >= 0 (``2 v / w`` to first order at the identity)."""
@@ -244,12 +265,53 @@ def from_matrix(M: Any, tol: float = 1e-6) -> np.ndarray:
     return u @ vt  # nearest rotation, exact to machine precision
 
 
+ROTATION_FORMS = ("identity, {rotvec: [x, y, z]}, {axis_angle: {axis: [x, y, z], angle: a}}, "
+                  "{quaternion: [w, x, y, z]} or {matrix: [[..], [..], [..]]}")
+_FORMS = ("rotvec", "axis_angle", "quaternion", "matrix")
+
+
+def _numbers(v: Any, n: int, what: str) -> np.ndarray:
+    if not isinstance(v, (list, tuple, np.ndarray)) or len(v) != n or any(
+            isinstance(c, bool) or not isinstance(c, (int, float, np.floating)) for c in v):
+        raise ConfigError(f"{what} needs a list of {n} numbers, got {v!r}")
+    return np.asarray(v, dtype=float)
+
+
+def from_spec(v: Any) -> np.ndarray:
+    """A rotation written in any documented form (:data:`ROTATION_FORMS`) or given as a
+    3 x 3 NumPy array, as a checked 3 x 3 matrix."""
+    if isinstance(v, str) and v == "identity":
+        return np.eye(3)
+    if isinstance(v, np.ndarray) and v.shape == (3, 3):
+        return from_matrix(v)
+    if not isinstance(v, dict) or len(v) != 1:
+        raise ConfigError(f"a rotation is {ROTATION_FORMS}; got {v!r}")
+    (kind, val), = v.items()
+    if kind == "rotvec":
+        return from_rotvec(_numbers(val, 3, "rotvec"))
+    if kind == "axis_angle":
+        if not isinstance(val, dict) or set(val) != {"axis", "angle"}:
+            raise ConfigError("axis_angle needs exactly the keys axis and angle")
+        angle = val["angle"]
+        if isinstance(angle, bool) or not isinstance(angle, (int, float)):
+            raise ConfigError(f"angle must be a number, got {angle!r}")
+        return from_axis_angle(_numbers(val["axis"], 3, "axis"), float(angle))
+    if kind == "quaternion":
+        return from_quaternion(_numbers(val, 4, "quaternion"))
+    if kind == "matrix":
+        if not isinstance(val, list) or len(val) != 3:
+            raise ConfigError("matrix needs 3 rows of 3 numbers")
+        return from_matrix(np.vstack([_numbers(r, 3, "a matrix row") for r in val]))
+    close = difflib.get_close_matches(str(kind), _FORMS, 1)
+    hint = f"; did you mean {close[0]!r}?" if close else ""
+    raise ConfigError(f"unknown rotation form {kind!r}{hint} A rotation is {ROTATION_FORMS}")
+
+
 class _SO3(LieGroup):
-    """The rotation group; elements are 3 x 3 matrices, flattened column-major."""
+    """The rotation group; elements are 3 x 3 matrices."""
 
     name = "SO3"
     dim = 3
-    size = 9
 
     def identity(self) -> np.ndarray:
         return np.eye(3)
@@ -278,19 +340,13 @@ class _SO3(LieGroup):
     def ad(self, x: Array) -> Array:
         return ad(x)
 
-    def flatten(self, g: Array) -> Array:
-        if is_symbolic(g):
-            return ca.reshape(g, 9, 1)
-        return np.asarray(g, dtype=float).reshape(9, order="F")
-
-    def unflatten(self, v: Array) -> Array:
-        if is_symbolic(v):
-            return ca.reshape(v, 3, 3)
-        return np.asarray(v, dtype=float).reshape(3, 3, order="F")
-
     def distance_from_group(self, g: Array) -> float:
         g = np.asarray(to_numpy(g), dtype=float)
         return float(np.linalg.norm(g.T @ g - np.eye(3)))
+
+    def sample(self, rng: np.random.Generator) -> np.ndarray:
+        """Haar-uniform: the rotation of a normalised Gaussian quaternion."""
+        return from_quaternion(rng.normal(size=4))
 
 
 SO3 = _SO3()

@@ -14,7 +14,7 @@ control and become the constraints Phi^A (their IPOPT multipliers are the seed's
 
 The Casimir ``Pi . Gamma`` is conserved for every control and declared so: with Gamma(T),
 Omega_1,2(T) and dtheta(T) prescribed it fixes Omega_3(T), so that one is left free, and a
-problem file that prescribes it too is rejected before IPOPT runs (:mod:`ocgroupoid.boundary`).
+problem file that prescribes it too is rejected before IPOPT runs (:mod:`ocgroupoid.nlp.boundary`).
 
 Two discretisations of the top equations: the seed's midpoint rule (the default), and
 :func:`lie_poisson`, the discrete top of the groupoid lecture (seed 004) written for the
@@ -30,18 +30,17 @@ import casadi as ca
 import numpy as np
 from pydantic import BaseModel, Field
 
-from ..config import (Number, Positive2, Positive3, Strict, UnitVector3, Vector2Free,
+from ..model.values import (Number, Positive2, Positive3, Strict, UnitVector3, Vector2Free,
                       Vector3Free)
-from ..discretize import Node
+from ..nlp.schemes import Node
 from ..errors import ConfigError
 from ..groupoid import Groupoid, Pair, SphereAction
-from ..mechanics import anchor
-from ..problem import Problem
-from ..solve import geodesic_guesses
+from ..model.mechanics import anchor
+from ..model.problem import GuessContext, Problem
 from .registry import ModelSpec, register
 
 if TYPE_CHECKING:
-    from ..transcribe import Transcription
+    from ..nlp.transcription import Transcription
 
 IBAR = (1.1, 1.2, 0.6)
 ROTOR = (0.1, 0.1)
@@ -79,10 +78,11 @@ def heavy_top(Ibar: Sequence[float] = IBAR, J: Sequence[float] = ROTOR, mgl: flo
 # ------------------------------------------------------------------ the Lie-Poisson rule
 
 
-def _sphere(pb: Problem) -> tuple[int, SphereAction]:
+def _sphere(pb: Problem) -> int:
+    """Index of the factor whose states live on S^2 (the action groupoid S^2 x SO(3))."""
     for i, f in enumerate(pb.groupoid.factors):
-        if isinstance(f, SphereAction):
-            return i, f
+        if f.manifold == "S^2":
+            return i
     raise ConfigError("the lie_poisson rule needs a SphereAction factor (S^2 x SO(3))")
 
 
@@ -91,7 +91,7 @@ def momentum(pb: Problem) -> tuple[ca.SX, ca.SX]:
     (``mgl Gamma x e3`` here), from the problem's Lagrangian."""
     if pb.dynamics is None:
         raise ConfigError("the lie_poisson rule derives the top equations from mechanics()")
-    i, _ = _sphere(pb)
+    i = _sphere(pb)
     Omega = pb.y[pb.groupoid.velocity_layout.slices[i]]
     l = pb.dynamics.lagrangian
     M = ca.gradient(l, Omega)
@@ -117,7 +117,7 @@ def lie_poisson(node: Node) -> ca.SX:
     exactly, whatever the controls. The other constraints, if any, use the midpoint rule.
     """
     pb = node.problem
-    i, _ = _sphere(pb)
+    i = _sphere(pb)
     mech = pb.dynamics
     vs = pb.groupoid.velocity_layout.slices[i]
     if mech is None or list(mech.unactuated) != list(range(vs.start, vs.stop)):
@@ -138,9 +138,9 @@ def discrete_casimir(tr: "Transcription", x: np.ndarray, p: np.ndarray) -> np.nd
     ``xi_{-1} = 2 V_0 - xi_0``, ``Gamma_{-1} = W_{-1} Gamma_0``, ``xi_N = 2 V_N - xi_{N-1}``):
     constant under the Lie-Poisson rule, to rounding."""
     pb = tr.problem
-    i, _ = _sphere(pb)
+    i = _sphere(pb)
     vs, ss = pb.groupoid.velocity_layout.slices[i], pb.groupoid.state_layout.slices[i]
-    ret = tr.stages.retractions[i]
+    ret = tr.scheme.retractions[i]
     d = tr.unpack(x, p)
     h = d["T"] / tr.N
     xi = np.vstack([2 * d["V0"] - d["xi"][0], d["xi"], 2 * d["VN"] - d["xi"][-1]])
@@ -154,8 +154,7 @@ def discrete_casimir(tr: "Transcription", x: np.ndarray, p: np.ndarray) -> np.nd
 # ------------------------------------------------------------------ multi-start guesses
 
 
-def rotor_guesses(problem: Problem, tr: "Transcription", p: np.ndarray
-                  ) -> list[tuple[str, np.ndarray]]:
+def rotor_guesses(problem: Problem, ctx: GuessContext) -> list[tuple[str, np.ndarray]]:
     """Gamma along the short great circle, one rotor spun up and back down:
     ``dtheta_i = +-A_i sin(pi t/T)``, with ``A_i = |Pi| / J_i`` the rate at which rotor i
     alone would carry the top's angular momentum (its largest value on the great circle).
@@ -165,12 +164,14 @@ def rotor_guesses(problem: Problem, tr: "Transcription", p: np.ndarray
     """
     k, rotors = problem.groupoid.by_velocity("dtheta")
     rs = problem.groupoid.velocity_layout.slices[k]
-    base = geodesic_guesses(tr, p)[0].xi
-    P = p[tr.p_layout["P"]]
+    base = ctx.base
+    P = np.concatenate([ctx.params[name] for name in problem.params])
+    V0 = np.nan_to_num(np.concatenate([ctx.initial[f.velocity]
+                                       for f in problem.groupoid.factors]))
     size = ca.Function("Pi", [problem.y, problem.P], [ca.norm_2(momentum(problem)[0])])
-    Pi = max(float(size(y, P)) for y in [p[tr.p_layout["V0"]], *base])
-    J = P[problem.parameter_slices["J"]]
-    t = (np.arange(tr.N) + 0.5) / tr.N
+    Pi = max(float(size(y, P)) for y in [V0, *base])
+    J = ctx.params["J"]
+    t = (np.arange(ctx.N) + 0.5) / ctx.N
     out = []
     for r in range(rotors.algebra_dim):
         for sign, word in ((1.0, "+"), (-1.0, "-")):

@@ -42,20 +42,17 @@ the two mirror minima (see ``Solution.minima``).
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import casadi as ca
 import numpy as np
 from pydantic import BaseModel, Field
 
-from ..config import Number, PositiveNumber, Rotation, Strict, Vector2, Vector2Free
+from ..model.values import Number, PositiveNumber, Rotation, Strict, Vector2, Vector2Free
 from ..groupoid import Groupoid, LieGroupFactor, Pair
 from ..lie import so3
-from ..problem import Problem
+from ..model.problem import GuessContext, Problem
 from .registry import ModelSpec, register
-
-if TYPE_CHECKING:
-    from ..transcribe import Transcription
 
 TARGET_XY = (1.0, 0.5)
 TARGET_R = so3.from_rotvec([-0.5, 1.0, 0.3])
@@ -98,8 +95,7 @@ def rolling_velocity(xy: np.ndarray, v: np.ndarray, r: float, Omega_p: float, c:
                             (v[:, 0] + Omega_p * xy[:, 1]) / r, np.full(len(v), c)])
 
 
-def bends(problem: Problem, tr: "Transcription", p: np.ndarray
-          ) -> list[tuple[str, np.ndarray]]:
+def bends(problem: Problem, ctx: GuessContext) -> list[tuple[str, np.ndarray]]:
     """Multi-start guesses: paths bending right and left (see the module docstring).
 
     Each path is the chord between the end points plus an offset, in units of the chord
@@ -109,12 +105,11 @@ def bends(problem: Problem, tr: "Transcription", p: np.ndarray
     guess satisfies the discrete rolling constraints and the final position exactly, whatever
     the rule; IPOPT corrects the attitude.
     """
-    G, N, T = problem.groupoid, tr.N, tr.horizon_of(p)
-    xy_slice, xy_factor = G.target_layout.slices[0], G.factors[0]
-    P = dict(zip(problem.params, p[tr.p_layout["P"]]))
-    start = p[tr.p_layout["start"]][xy_slice]
-    end = np.where(tr.masks.end_state[0], p[tr.p_layout["end"]][xy_slice], start)
-    start, end = xy_factor.state_of_target(start), xy_factor.state_of_target(end)
+    N, T = ctx.N, ctx.T
+    P = {name: float(v[0]) for name, v in ctx.params.items()}
+    start = ctx.initial["xy"]
+    end = ctx.final.get("xy", np.full(2, np.nan))
+    end = np.where(np.isnan(end), start, end)
     chord = end - start
     dist = float(np.linalg.norm(chord))
     along = chord / dist if dist > 1e-9 else np.array([1.0, 0.0])

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Callable
 from pydantic import BaseModel
 
 if TYPE_CHECKING:
-    from ..problem import Problem
+    from ..model.problem import Problem
 
 
 @dataclass(frozen=True)

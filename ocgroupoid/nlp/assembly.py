@@ -11,21 +11,39 @@ evaluation is one pass over the stages (no colouring sweeps over the whole graph
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from enum import Enum
 from typing import Callable
 
 import casadi as ca
 import numpy as np
 
 
+class Kind(Enum):
+    """What a block's constraint rows are; the value is how reports name them."""
+
+    RECONSTRUCTION = "reconstruction"  # s_{k+1} = step(s_k, tau(...)): multipliers unused
+    PATH = "Phi_d"  # the discrete constraints Phi_d: their multipliers are the seeds' lambda^k
+    FINAL = "final conditions"  # prescribed final states, in the factors' charts
+    FINAL_CONDITION = "final conditions (user)"  # Problem.final_condition equations
+
+
 @dataclass
 class Block:
-    """One kind of stage: ``fun(z) -> (f, g)`` applied to the columns of ``w[idx]``."""
+    """One kind of stage: ``fun(z) -> (f, g)`` applied to the columns of ``w[idx]``.
+
+    ``rows`` names the m constraint rows of one column and ``columns`` each column (e.g.
+    ``node 3``); ``times`` are the columns' times as fractions of T (path constraints).
+    """
 
     name: str
     fun: ca.Function
     idx: np.ndarray  # (len(z), ncols) indices into w = [x; p]
     n_param: int = 0  # trailing entries of z that are parameters in every column
+    kind: Kind = Kind.PATH
+    rows: list[str] = field(default_factory=list)
+    columns: list[str] = field(default_factory=list)
+    times: np.ndarray = field(default_factory=lambda: np.zeros(0))
     g_offset: int = 0
 
     @property
@@ -40,6 +58,18 @@ class Block:
     @property
     def m(self) -> int:
         return int(self.fun.size1_out(1))
+
+    @property
+    def g_rows(self) -> np.ndarray:
+        """Global constraint rows, shaped (m, ncols): column c holds stage c's rows."""
+        return self.g_offset + np.arange(self.m * self.ncols).reshape(self.ncols, self.m).T
+
+    def labels(self) -> list[str]:
+        """A readable name for each of its constraint rows, column by column."""
+        rows = self.rows or [f"row {r}" for r in range(self.m)]
+        cols = self.columns or [f"column {c}" for c in range(self.ncols)]
+        return [f"{rows[r]} at {cols[c]}" if cols[c] else rows[r]
+                for c in range(self.ncols) for r in range(self.m)]
 
 
 def _gather(v: ca.MX, idx: np.ndarray) -> ca.MX:
@@ -134,6 +164,29 @@ def _nonzeros(M: ca.SX) -> ca.SX:
     return ca.vertcat(*M.nonzeros()) if M.nnz() else ca.SX(0, 1)
 
 
+def _stage_sums(blocks: list[Block], w: ca.MX) -> tuple[ca.MX, ca.MX, list[ca.MX]]:
+    """f (the sum of the mapped stage costs), g (the stacked stage constraints) and each
+    block's gathered stage inputs; sets the blocks' row offsets in g."""
+    offset = 0
+    f_terms, g_terms, inputs = [], [], []
+    for b in blocks:
+        b.g_offset = offset
+        offset += b.m * b.ncols
+        Z = _gather(w, b.idx)
+        F, G = b.fun.map(b.ncols)(Z)
+        f_terms.append(ca.sum2(F))
+        g_terms.append(ca.vec(G))
+        inputs.append(Z)
+    return sum(f_terms[1:], f_terms[0]), ca.vertcat(*g_terms), inputs
+
+
+def plain_nlp(blocks: list[Block], x: ca.MX, p: ca.MX) -> dict[str, ca.MX]:
+    """The same NLP as a plain ``{x, p, f, g}`` dict, for ``nlpsol`` to differentiate with
+    CasADi's own AD: the baselines the assembly is measured against (scripts/bench_so3.py)."""
+    f, g, _ = _stage_sums(blocks, ca.vertcat(x, p))
+    return {"x": x, "p": p, "f": f, "g": g}
+
+
 def assemble(blocks: list[Block], x: ca.MX, p: ca.MX) -> dict[str, ca.Function]:
     """The NLP functions IPOPT needs, from the blocks: f, g and their derivatives.
 
@@ -141,22 +194,12 @@ def assemble(blocks: list[Block], x: ca.MX, p: ca.MX) -> dict[str, ca.Function]:
     the names and signatures ``casadi.nlpsol`` looks up in its function cache.
     """
     nx = x.numel()
-    w = ca.vertcat(x, p)
-    offset = 0
-    for b in blocks:
-        b.g_offset = offset
-        offset += b.m * b.ncols
-    ng = offset
+    f, g, inputs = _stage_sums(blocks, ca.vertcat(x, p))
+    ng = int(g.numel())
     lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", ng)
-
-    f_terms, g_terms = [], []
     grad, jac, hess = _Scatter(), _Scatter(), _Scatter()
-    for b in blocks:
+    for b, Z in zip(blocks, inputs):
         d = StageDerivatives(b)
-        Z = _gather(w, b.idx)
-        F, G = b.fun.map(b.ncols)(Z)
-        f_terms.append(ca.sum2(F))
-        g_terms.append(ca.vec(G))
         LAM = ca.reshape(lam_g[b.g_offset:b.g_offset + b.m * b.ncols], b.m, b.ncols)
         var = b.idx[: b.n_var]  # (stage entry, column) -> index into w
         grad.add(d.grad.map(b.ncols)(Z), var, np.zeros_like(var))
@@ -165,8 +208,6 @@ def assemble(blocks: list[Block], x: ca.MX, p: ca.MX) -> dict[str, ca.Function]:
                 b.g_offset + np.arange(b.ncols)[None, :] * b.m + d.jac_rows[:, None],
                 var[d.jac_cols, :])
         hess.add(d.hess.map(b.ncols)(Z, lam_f, LAM), var[d.hess_rows, :], var[d.hess_cols, :])
-    f = sum(f_terms[1:], f_terms[0])
-    g = ca.vertcat(*g_terms)
     grad_f = grad.dense(nx, lambda r, c: r < nx)
     jac_g = jac.sparse((ng, nx), lambda r, c: c < nx)
     hess_l = hess.sparse((nx, nx), lambda r, c: (r < nx) & (c < nx) & (r <= c))

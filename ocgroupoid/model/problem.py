@@ -28,13 +28,32 @@ from typing import Any, Callable, Sequence
 import casadi as ca
 import numpy as np
 
-from .errors import ConfigError, DimensionError
-from .groupoid.base import Factor
-from .groupoid.product import Groupoid
+from ..errors import ConfigError, DimensionError
+from ..groupoid.base import Factor
+from ..groupoid.product import Groupoid
 from .mechanics import Mechanics, split
+from .values import check_horizon, check_vector
 
-Value = Any
-GuessHook = Callable[["Problem", Any], list[tuple[str, np.ndarray]]]
+
+
+@dataclass(frozen=True)
+class GuessContext:
+    """What a model's guess hook sees of one instance.
+
+    ``initial``/``final`` map state and velocity names to numeric values (NaN where a
+    component is free; a free quantity is absent); ``base`` is the preferred geodesic guess
+    (N x dim y interval velocities), to be modified rather than rebuilt.
+    """
+
+    N: int
+    T: float
+    params: dict[str, np.ndarray]
+    initial: dict[str, np.ndarray]
+    final: dict[str, np.ndarray]
+    base: np.ndarray
+
+
+GuessHook = Callable[["Problem", GuessContext], list[tuple[str, np.ndarray]]]
 
 
 @dataclass
@@ -59,35 +78,11 @@ class Boundary:
     velocities: dict[str, Any] = field(default_factory=dict)
 
 
-def _as_vector(value: Any, n: int, what: str, allow_none: bool) -> list[float | None]:
-    if isinstance(value, np.ndarray):
-        value = value.tolist()
-    if not isinstance(value, (list, tuple)):
-        value = [value] if n == 1 else value
-    if not isinstance(value, (list, tuple)) or len(value) != n:
-        raise DimensionError(f"{what} needs {n} components, got {value!r}")
-    out: list[float | None] = []
-    for v in value:
-        if v is None:
-            if not allow_none:
-                raise ConfigError(f"{what} cannot leave single components free")
-            out.append(None)
-            continue
-        try:
-            x = float(v)
-        except (TypeError, ValueError):
-            raise ConfigError(f"{what} components must be numbers, got {v!r}") from None
-        if not np.isfinite(x):
-            raise ConfigError(f"{what} has a non-finite component {v!r}; give a finite number")
-        out.append(x)
-    return out
-
-
 class Problem:
     """An optimal-control problem on a product Lie groupoid (see the module docstring)."""
 
     def __init__(self, groupoid: Groupoid | Factor, name: str = "problem", order: int = 2):
-        if isinstance(groupoid, Factor):
+        if not isinstance(groupoid, Groupoid):
             groupoid = Groupoid(groupoid)
         if order not in (1, 2):
             raise ConfigError(f"order is 1 (first-order cost) or 2 (second-order), got {order}")
@@ -110,6 +105,12 @@ class Problem:
         self.invariants: list[tuple[str, ca.SX]] = []
         self.final_conditions: list[tuple[str, ca.SX]] = []
 
+    @property
+    def end_velocities(self) -> bool:
+        """Whether velocities carry boundary values: in second-order problems (the cost
+        depends on dy), not in first-order ones (the velocities are the controls)."""
+        return self.order == 2
+
     # -- symbols -----------------------------------------------------------------------
 
     def parameter(self, name: str, size: int = 1, value: Sequence[float] | float | None = None,
@@ -119,7 +120,7 @@ class Problem:
             raise ConfigError(f"parameter {name!r} declared twice")
         if value is None:
             raise ConfigError(f"parameter {name!r} needs a default value")
-        vec = np.asarray(_as_vector(value, size, f"parameter {name}", False), dtype=float)
+        vec = np.asarray(check_vector(value, size, what=f"parameter {name}"), dtype=float)
         sym = ca.SX.sym(name, size)
         self.params[name] = Parameter(name, sym, vec, doc)
         return sym
@@ -148,7 +149,7 @@ class Problem:
         vals = []
         for p in self.params.values():
             v = overrides.get(p.name, p.value)
-            vals.append(np.asarray(_as_vector(v, p.symbol.numel(), f"parameter {p.name}", False)))
+            vals.append(np.asarray(check_vector(v, p.symbol.numel(), what=f"parameter {p.name}")))
         return np.concatenate(vals) if vals else np.zeros(0)
 
     def state(self, name: str) -> ca.SX:
@@ -231,7 +232,7 @@ class Problem:
 
         Its final value is then fixed by the initial one, and a final condition that it
         already determines is reported as over-determined before IPOPT runs (see
-        :mod:`ocgroupoid.boundary`, which also checks the claim against the constraints).
+        :mod:`ocgroupoid.nlp.boundary`, which also checks the claim against the constraints).
         """
         if self.order != 2 or not self.constraints:
             raise ConfigError(f"conserved quantity {name!r}: declare it after mechanics() or "
@@ -291,7 +292,7 @@ class Problem:
             if name in self.groupoid.state_names:
                 where.states[name] = self.check_state(name, value, end)
             elif name in self.groupoid.velocity_names:
-                if self.order == 1:
+                if not self.end_velocities:
                     raise ConfigError(
                         f"{end}.{name}: a first-order problem takes no velocity conditions"
                     )
@@ -308,7 +309,7 @@ class Problem:
         if value is None:
             return None
         if f.componentwise:
-            return _as_vector(value, f.state_size, f"{end}.{name}", True)
+            return check_vector(value, f.state_size, allow_none=True, what=f"{end}.{name}")
         return f.parse_state(value)
 
     def check_velocity(self, name: str, value: Any, end: str) -> list[float | None] | None:
@@ -316,30 +317,22 @@ class Problem:
         _, f = self.groupoid.by_velocity(name)
         if value is None:
             return None
-        return _as_vector(value, f.algebra_dim, f"{end}.{name}", True)
+        return check_vector(value, f.algebra_dim, allow_none=True, what=f"{end}.{name}")
 
     def horizon(self, T: float) -> None:
         """Set the default final time T (> 0)."""
         self.T = check_horizon(T)
 
-    def guesses(self, hook: GuessHook) -> None:
+    def guesses(self, hook: "GuessHook") -> None:
         """Register model-specific initial guesses for multi-start.
 
-        ``hook(problem, transcription)`` returns labelled velocity arrays (N x dim y).
+        ``hook(problem, context)`` returns labelled velocity arrays (N x dim y), one row per
+        interval; ``context`` is a :class:`GuessContext` (N, T, parameters, boundary values
+        and the preferred geodesic guess).
         """
         self.guess_hook = hook
 
     def rule(self, name: str, builder: Callable[..., ca.SX]) -> None:
-        """Register an alternative discretisation of the constraints (see discretize.Node)."""
+        """Register an alternative discretisation of the constraints of the order2 scheme:
+        ``builder(node)`` gets a :class:`ocgroupoid.nlp.schemes.Node`."""
         self.rules[name] = builder
-
-
-def check_horizon(T: Any) -> float:
-    """A finite, positive horizon, or a ConfigError saying so."""
-    try:
-        T = float(T)
-    except (TypeError, ValueError):
-        raise ConfigError(f"horizon T must be a number, got {T!r}") from None
-    if not np.isfinite(T) or T <= 0:
-        raise ConfigError(f"horizon T must be finite and > 0, got {T}")
-    return T

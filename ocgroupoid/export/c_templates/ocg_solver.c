@@ -432,7 +432,9 @@ int ocg_write_json(const ocg_result *r, FILE *out) {
   ocg_json_number(out, r->cost);
   fprintf(out, ",\n \"stats\": {\"iterations\": %d, \"solve_seconds\": ", r->iterations);
   ocg_json_number(out, r->seconds);
-  fputs("},\n \"discretization\": {\"retraction\": ", out);
+  fputs("},\n \"discretization\": {\"scheme\": ", out);
+  ocg_json_string(out, OCG_SCHEME);
+  fputs(", \"retraction\": ", out);
   ocg_json_string(out, OCG_RETRACTION);
   fputs(", \"rule\": ", out);
   ocg_json_string(out, OCG_RULE);

@@ -12,16 +12,17 @@ redundant boundary condition makes LICQ fail and IPOPT stall).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import casadi as ca
 import numpy as np
 
-from .discretize import Discretization
-from .problem import Problem
-from .solve import geodesic_guesses, perturbed_guesses
-from .transcribe import Transcription
+from ..model.problem import Problem
+from ..nlp.assembly import Kind
+from ..nlp.schemes import DEFAULT_RULE, DEFAULT_SCHEME
+from ..nlp.transcription import Discretization, Transcription
+from .guesses import geodesic_guesses, perturbed_guesses
 
 SMALL_N = 8
 
@@ -46,10 +47,11 @@ def boundary_lists(tr: Transcription) -> tuple[list[str], list[str]]:
     """Prescribed and free boundary values, as ``initial.R``/``final.Omega[2]`` strings."""
     pb, G, m = tr.problem, tr.problem.groupoid, tr.masks
     given, free = [], []
-    for end, states, vels in (("initial", m.start_state, m.start_velocity_by(G)),
-                              ("final", m.end_state, m.end_velocity_by(G))):
+    by_factor = lambda flags: [flags[vs] for vs in G.velocity_layout.slices]  # noqa: E731
+    for end, states, vels in (("initial", m.start_state, by_factor(m.start_velocity)),
+                              ("final", m.end_state, by_factor(m.end_velocity))):
         for f, sm, vm in zip(G.factors, states, vels):
-            for name, mask in ((f.state, sm), (f.velocity, vm if pb.order == 2 else None)):
+            for name, mask in ((f.state, sm), (f.velocity, vm if pb.end_velocities else None)):
                 if mask is None:
                     continue
                 if mask.all():
@@ -88,17 +90,15 @@ def redundant_rows(tr: Transcription, tol: float = 1e-9) -> list[str]:
     return found
 
 
-def check(problem: Problem, N: int, retraction: str = "cayley", rule: str = "midpoint",
-          ipopt: dict[str, Any] | None = None) -> CheckReport:
+def check(problem: Problem, N: int, retraction: str = "cayley", rule: str = DEFAULT_RULE,
+          ipopt: dict[str, Any] | None = None, scheme: str = DEFAULT_SCHEME) -> CheckReport:
     """Build the NLP at the file's N (dimensions) and at a small N (redundancy test)."""
-    tr = Transcription(problem, Discretization(N, retraction, rule), ipopt)
+    disc = Discretization(N, retraction, rule, scheme)
+    tr = Transcription(problem, disc, ipopt)
     blocks: dict[str, int] = {}
     for b in tr.blocks:
-        key = {"node0": "Phi_d", "node": "Phi_d", "nodeN": "Phi_d", "interval": "Phi_d",
-               "recon": "reconstruction", "final": "final conditions",
-               "final_conditions": "final conditions"}[b.name]
+        key = "final conditions" if b.kind is Kind.FINAL_CONDITION else b.kind.value
         blocks[key] = blocks.get(key, 0) + b.m * b.ncols
     given, free = boundary_lists(tr)
-    small = tr if N <= SMALL_N else Transcription(problem, Discretization(SMALL_N, retraction,
-                                                                          rule), ipopt)
+    small = tr if N <= SMALL_N else Transcription(problem, replace(disc, N=SMALL_N), ipopt)
     return CheckReport(tr.nx, blocks, tr.nx - tr.ng, given, free, redundant_rows(small))

@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from .errors import SolverError
+from ..errors import SolverError
 
 
 def _jsonable(v: Any) -> Any:

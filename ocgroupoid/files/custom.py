@@ -20,18 +20,18 @@ with a Lagrangian, the controls ``u`` (and each control by its name). Without a 
 
 from __future__ import annotations
 
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 import casadi as ca
-from pydantic import BaseModel, Field, create_model
+from pydantic import BaseModel, BeforeValidator, Field, create_model
 
-from .config import Rotation, Strict, UnitVector3, _vector, check_vector
-from .errors import ConfigError
+from ..errors import ConfigError
+from ..groupoid import Groupoid, LieGroupFactor, Pair, SphereAction
+from ..groupoid.base import Factor
+from ..model.problem import Problem
+from ..model.values import Strict, check_vector, vector
+from ..models.registry import ModelSpec
 from .expressions import CONSTANTS, FUNCTIONS, compile_expression
-from .groupoid import Groupoid, LieGroupFactor, Pair, SphereAction
-from .groupoid.base import Factor
-from .models.registry import ModelSpec
-from .problem import Problem
 
 
 class FactorDefinition(Strict):
@@ -92,17 +92,14 @@ def spec(definition: Definition, where: Any) -> ModelSpec:
     initial_fields: dict[str, Any] = {}
     final_fields: dict[str, Any] = {}
     for f in factors:
-        if isinstance(f, LieGroupFactor):
-            kind: Any = Rotation
-        elif isinstance(f, SphereAction):
-            kind = UnitVector3
-        else:
-            kind = _vector(f.state_size, allow_none=True)
+        # a factor reads its own state values; R^n components may be left free (null)
+        kind: Any = vector(f.state_size, allow_none=True) if f.componentwise else \
+            Annotated[Any, BeforeValidator(f.parse_state)]
         initial_fields[f.state] = (kind if not f.componentwise else kind | None,
                                    Field(... if not f.componentwise else None))
         final_fields[f.state] = (kind | None, Field(None))
         if definition.order == 2:
-            vel = _vector(f.algebra_dim, allow_none=True)
+            vel = vector(f.algebra_dim, allow_none=True)
             initial_fields[f.velocity] = (vel | None, Field(None))
             final_fields[f.velocity] = (vel | None, Field(None))
     Initial = create_model("Initial", __base__=Strict, **initial_fields)
@@ -129,7 +126,7 @@ def _values(params: BaseModel, where: Any) -> dict[str, list[float]]:
         vec = value if isinstance(value, list) else [value]
         try:
             out[name] = check_vector(vec, len(vec))
-        except ValueError as err:
+        except ConfigError as err:
             raise ConfigError(f"{where('parameters', name)}: parameters.{name}: {err}") from None
     return out
 

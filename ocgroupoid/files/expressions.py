@@ -17,7 +17,7 @@ from typing import Any, Callable, Mapping
 import casadi as ca
 import numpy as np
 
-from .errors import ConfigError
+from ..errors import ConfigError
 
 
 def _norm(x: Any) -> Any:

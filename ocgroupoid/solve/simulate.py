@@ -10,37 +10,34 @@ first integrals (energy, |I Omega|^2 of the rigid body) are conserved.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import casadi as ca
 import numpy as np
 
-from .errors import ConfigError, SolverError
-
-if TYPE_CHECKING:
-    from .discretize import Stages
+from ..errors import ConfigError, SolverError
+from ..nlp.schemes import NodeMidpoint
 
 
 class DiscreteFlow:
     """Step the discrete dynamics of a second-order problem forward in time."""
 
-    def __init__(self, stages: "Stages") -> None:
-        pb = stages.problem
+    def __init__(self, scheme: NodeMidpoint) -> None:
+        pb = scheme.problem
         if pb.order != 2 or pb.dynamics is None:
             raise ConfigError("a discrete flow needs a second-order problem with mechanics()")
+        if not isinstance(scheme, NodeMidpoint):
+            raise ConfigError(f"a discrete flow steps the order2 node rule, not {scheme.name}")
         G = pb.groupoid
         dg, ds = G.algebra_dim, G.state_size
         s, xp, xn, T = ca.SX.sym("s", ds), ca.SX.sym("xp", dg), ca.SX.sym("xn", dg), ca.SX.sym("T")
         u = ca.SX.sym("u", len(pb.controls))
-        _, phi, u_expr = stages.node(s, xp, xn, T, pb.P)
+        _, phi, u_expr = scheme.node(s, xp, xn, T, pb.P)
         res = ca.vertcat(u_expr - u, phi)
         fun = ca.Function("node_eq", [xn, s, xp, T, u, pb.P], [res])
         self.solve_node = ca.rootfinder("flow", "newton", fun, {"abstol": 1e-14})
         ghost = ca.Function("first", [xn, s, xp, T, u, pb.P],
                             [ca.substitute(res, xp, 2 * xp - xn)])
         self.solve_first = ca.rootfinder("flow0", "newton", ghost, {"abstol": 1e-14})
-        self.step_state = stages.step
-        self.P = pb.P
+        self.step, self.N = scheme.stages.step, scheme.N
 
     def run(self, s0: np.ndarray, V0: np.ndarray, controls: np.ndarray, T: float,
             params: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -63,5 +60,5 @@ class DiscreteFlow:
                 raise SolverError(f"Newton failed at step {k}: {err}; reduce the step") from None
             prev = np.array(xk).ravel()
             xi[k] = prev
-            s[k + 1] = np.array(self.step_state(s[k], prev, T)).ravel()
+            s[k + 1] = np.array(self.step(s[k], T / self.N * prev)).ravel()
         return s, xi

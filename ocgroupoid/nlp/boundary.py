@@ -26,17 +26,14 @@ vanish wherever the constraints ``Phi(q, y, dy) = 0`` hold, i.e. be a combinatio
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
-
 import casadi as ca
 import numpy as np
 
-from .errors import BoundaryError, ConfigError
-from .mechanics import anchor
-
-if TYPE_CHECKING:
-    from .problem import Problem
-    from .transcribe import Transcription
+from ..errors import BoundaryError, ConfigError
+from ..model.mechanics import anchor
+from ..model.problem import Problem
+from .layout import Layout, Masks
+from .stages import Stages
 
 RANK_TOL = 1e-8  # singular values below RANK_TOL * (largest, at least 1) count as zero
 SAMPLES = 4  # random states at which a declared conservation law is checked
@@ -56,9 +53,11 @@ class Row:
 class FinalConditions:
     """The final equations of a transcription and their rank test (module docstring)."""
 
-    def __init__(self, tr: "Transcription", seed: int = 0) -> None:
-        pb, G, m = tr.problem, tr.problem.groupoid, tr.masks
-        self.tr, self.seed = tr, seed
+    def __init__(self, problem: Problem, masks: Masks, layout: Layout, stages: Stages,
+                 seed: int = 0) -> None:
+        pb, G, m = problem, problem.groupoid, masks
+        self.problem, self.masks, self.layout, self.stages = problem, masks, layout, stages
+        self.seed = seed
         self.laws_checked = False  # declared conservation laws: a property of the model
         ds, dg, nt = G.state_size, G.algebra_dim, G.target_size
         s, v = ca.SX.sym("s", ds), ca.SX.sym("v", dg)
@@ -66,7 +65,7 @@ class FinalConditions:
         self.base = ca.Function("base", [s], [G.base(s)])
         self.rates = {name: _conservation(pb, C) for name, C in pb.invariants}
         q = G.base(s)
-        y = v if pb.order == 2 else ca.SX.zeros(dg)
+        y = v if pb.end_velocities else ca.SX.zeros(dg)
         at_node = (ca.vertcat(pb.q, pb.y), ca.vertcat(q, y))
         rows: list[ca.SX] = []
         self.rows: list[Row] = []
@@ -74,7 +73,7 @@ class FinalConditions:
             if self._fixed_initially(C):
                 rows.append(ca.substitute(C, *at_node))
                 self.rows += [Row(f"conserved quantity {name!r}", name, False, "")] * C.numel()
-        chart = tr.stages.chart(s, target)
+        chart = stages.chart(s, target)
         k = 0
         for f, mask in zip(G.factors, m.end_state):
             for j in np.flatnonzero(mask):
@@ -85,7 +84,7 @@ class FinalConditions:
                     label, fix = f"final.{f.state}", f"leave final.{f.state} free"
                 self.rows.append(Row(label, f"final.{f.state}", True, fix))
             k += f.state_dim
-        if pb.order == 2:
+        if pb.end_velocities:
             for f, vs in zip(G.factors, G.velocity_layout.slices):
                 for j in np.flatnonzero(m.end_velocity[vs]):
                     label = f"final.{f.velocity}[{j}]"
@@ -109,10 +108,10 @@ class FinalConditions:
 
     def _fixed_initially(self, C: ca.SX) -> bool:
         """Whether every q and y component C depends on is prescribed at t = 0."""
-        pb, G, m = self.tr.problem, self.tr.problem.groupoid, self.tr.masks
+        pb, G, m = self.problem, self.problem.groupoid, self.masks
         given_q = [np.ones(f.base_size, bool) if not f.componentwise else mask
                    for f, mask in zip(G.factors, m.start_state)]
-        given_y = m.start_velocity if pb.order == 2 else np.zeros(G.algebra_dim, bool)
+        given_y = m.start_velocity if pb.end_velocities else np.zeros(G.algebra_dim, bool)
         given = np.concatenate([*given_q, given_y])
         used = np.array(ca.which_depends(C, ca.vertcat(pb.q, pb.y), 1, False), dtype=bool)
         return bool(np.all(given[used]))
@@ -121,10 +120,10 @@ class FinalConditions:
              ) -> tuple[np.ndarray, np.ndarray]:
         """A node ``(s, y)`` on the manifolds: random (states reached from the initial ones by
         random steps), with the prescribed final values of p where ``prescribed``."""
-        tr, G, m = self.tr, self.tr.problem.groupoid, self.tr.masks
-        start, end = p[tr.p_layout["start"]], p[tr.p_layout["end"]]
+        G, m, lay = self.problem.groupoid, self.masks, self.layout.p_slices
+        start, end = p[lay["start"]], p[lay["end"]]
         parts = []
-        for f, r, ts, mask in zip(G.factors, tr.stages.retractions, G.target_layout.slices,
+        for f, r, ts, mask in zip(G.factors, self.stages.retractions, G.target_layout.slices,
                                   m.end_state):
             s0 = np.asarray(f.state_of_target(start[ts]), dtype=float)
             s = np.asarray(f.step(s0, r, rng.normal(size=f.algebra_dim)), dtype=float).ravel()
@@ -132,7 +131,7 @@ class FinalConditions:
                 goal = np.asarray(f.state_of_target(end[ts]), dtype=float)
                 s = np.where(mask, goal, s) if f.componentwise else goal
             parts.append(s)
-        VN = p[tr.p_layout["VN"]]
+        VN = p[lay["VN"]]
         v = rng.normal(size=VN.size)
         if prescribed:
             v = np.where(m.end_velocity, VN, v)
@@ -144,13 +143,14 @@ class FinalConditions:
         final condition (tested at every p: it depends on the prescribed values)."""
         if not self.laws_checked:
             rng = np.random.default_rng(self.seed)
-            for name, C in self.tr.problem.invariants:
+            for name, C in self.problem.invariants:
                 self._check_conserved(name, C, p, rng)
             self.laws_checked = True
         if not self.rows:
             return
         s, v = self.node(p, np.random.default_rng(self.seed + 1), prescribed=True)
-        J = np.array(self.jacobian(s, v, p[self.tr.p_layout["end"]], p[self.tr.p_layout["P"]]))
+        lay = self.layout.p_slices
+        J = np.array(self.jacobian(s, v, p[lay["end"]], p[lay["P"]]))
         scale = max(1.0, float(np.max(np.abs(J))))
         kept: list[int] = []
         for i, row in enumerate(self.rows):
@@ -163,7 +163,7 @@ class FinalConditions:
                          rng: np.random.Generator) -> None:
         """``dC/dt = c0 + c . dy`` must equal ``mu . (A dy + b)``, the constraints linearised
         in dy, for some mu: tested by least squares at random nodes."""
-        P = p[self.tr.p_layout["P"]]
+        P = p[self.layout.p_slices["P"]]
         for _ in range(SAMPLES):
             s, y = self.node(p, rng, prescribed=False)
             q = np.array(self.base(s)).ravel()

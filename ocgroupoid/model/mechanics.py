@@ -21,8 +21,8 @@ from typing import Sequence
 
 import casadi as ca
 
-from .errors import ConfigError, DimensionError
-from .groupoid.product import Groupoid
+from ..errors import ConfigError, DimensionError
+from ..groupoid.product import Groupoid
 
 
 def anchor(groupoid: Groupoid, q: ca.SX, y: ca.SX) -> ca.SX:

@@ -1,0 +1,76 @@
+"""pydantic's validation errors as messages that name the key, the line and the fix."""
+
+from __future__ import annotations
+
+import difflib
+from typing import Any
+
+from pydantic import BaseModel, ValidationError
+
+from ..errors import ConfigError
+from .source import Locator
+
+
+def _fix(err: dict[str, Any], key: str, known: list[str] | None) -> str:
+    """A message with the fix for one pydantic error."""
+    kind, value = err["type"], err.get("input")
+    ctx = err.get("ctx") or {}
+    last = key.rsplit(".", 1)[-1]
+    if kind == "extra_forbidden":
+        close = difflib.get_close_matches(last, known or [], 1)
+        hint = f" did you mean {close[0]!r}?" if close else ""
+        return (f"unknown key {key!r};{hint} keys allowed here: {', '.join(known or [])}")
+    if kind == "missing":
+        return f"missing key {key!r}; add it (see problems/ for an example)"
+    if kind in ("int_type", "int_from_float", "int_parsing"):
+        return f"{key} must be an integer (e.g. 64), got {value!r}"
+    if kind in ("greater_than_equal", "greater_than"):
+        bound = ctx.get("ge", ctx.get("gt"))
+        op = ">=" if kind == "greater_than_equal" else ">"
+        return f"{key} must be {op} {bound}, got {value!r}; raise it"
+    if kind == "literal_error":
+        options = [o.strip(" '") for o in str(ctx.get("expected", "")).replace(" or ", ", ")
+                   .split(",")]
+        close = difflib.get_close_matches(str(value), options, 1)
+        hint = f" did you mean {close[0]!r}?" if close else ""
+        return f"{key}: {value!r} is not allowed;{hint} choose one of {', '.join(options)}"
+    if kind in ("dict_type", "model_type", "model_attributes_type"):
+        return f"{key} must be a mapping (key: value), got {value!r}"
+    if kind == "list_type":
+        return f"{key} must be a list, e.g. [1, 2, 3], got {value!r}"
+    if kind in ("string_type",):
+        return f"{key} must be text, got {value!r}; quote it"
+    if kind in ("bool_type", "bool_parsing"):
+        return f"{key} must be true or false, got {value!r}"
+    if kind in ("float_type", "float_parsing", "finite_number"):
+        return f"{key} must be a finite number, got {value!r}"
+    msg = str(err["msg"]).removeprefix("Value error, ")
+    return f"{key}: {msg}"
+
+
+def _fields_at(model: type[BaseModel], loc: tuple) -> list[str] | None:
+    """Field names of the (sub)model that owns the last key of ``loc``."""
+    current: Any = model
+    for part in loc[:-1]:
+        fields = getattr(current, "model_fields", None)
+        if not fields or part not in fields:
+            return None
+        ann = fields[part].annotation
+        current = ann if isinstance(ann, type) and issubclass(ann, BaseModel) else None
+        if current is None:
+            return None
+    return list(getattr(current, "model_fields", {}) or [])
+
+
+def validate(model: type[BaseModel], data: Any, prefix: tuple, locate: Locator) -> Any:
+    """``model.model_validate(data)`` with errors that name the key, the line and the fix."""
+    try:
+        return model.model_validate(data if data is not None else {})
+    except ValidationError as exc:
+        messages = []
+        for err in exc.errors():
+            loc = tuple(x for x in err["loc"] if not str(x).startswith("function-"))
+            path = (*prefix, *loc)
+            key = ".".join(map(str, path))
+            messages.append(f"{locate(*path)}: {_fix(err, key, _fields_at(model, loc))}")
+        raise ConfigError("\n".join(messages)) from None

@@ -1,0 +1,29 @@
+"""Discretisation schemes by name: one class per scheme and problem order."""
+
+from __future__ import annotations
+
+from ...errors import ConfigError
+from ...model.problem import Problem
+from .base import Readout, Scheme
+from .order2 import DEFAULT_RULE, IntervalMidpoint, Node, NodeMidpoint
+
+#: scheme name -> problem order (1 or 2) -> class
+SCHEMES: dict[str, dict[int, type[Scheme]]] = {
+    "order2": {2: NodeMidpoint, 1: IntervalMidpoint},
+}
+SCHEME_NAMES = tuple(SCHEMES)
+DEFAULT_SCHEME = "order2"
+
+
+def make_scheme(name: str, problem: Problem, N: int, retraction: str, rule: str) -> Scheme:
+    """The scheme called ``name`` for ``problem`` (its class depends on the problem order)."""
+    if name not in SCHEMES:
+        raise ConfigError(f"unknown scheme {name!r}; choose one of {', '.join(SCHEME_NAMES)}")
+    by_order = SCHEMES[name]
+    if problem.order not in by_order:
+        raise ConfigError(f"scheme {name!r} has no rule for order-{problem.order} problems")
+    return by_order[problem.order](problem, N, retraction, rule)
+
+
+__all__ = ["Scheme", "Readout", "Node", "NodeMidpoint", "IntervalMidpoint", "SCHEMES",
+           "SCHEME_NAMES", "DEFAULT_SCHEME", "DEFAULT_RULE", "make_scheme"]

@@ -1,0 +1,110 @@
+"""What a discretisation scheme is: the small interface every scheme implements.
+
+A scheme (rockit calls it a method) turns the continuous problem into stages on N intervals:
+
+* :attr:`n_stage` variables of its own in x, arranged by :meth:`index` (which also gives
+  the w-indices of the node states and of the final velocity, where the shared final
+  conditions read them);
+* :meth:`blocks`: its stage Functions with their index columns (the reconstruction, the
+  discrete action sum and the discrete constraints Phi_d, whose multipliers are the seeds'
+  lambda^k);
+* :meth:`point`: the NLP point of a guess given as interval velocities;
+* :meth:`readout`: what a solution reports — algebra increments per interval, the node
+  states by exact reconstruction, velocities and controls with their time stamps — as
+  graphs of w, so that Python and exported C evaluate the same Function;
+* :meth:`euler_lagrange_residual`: the discrete Euler-Lagrange equations checked with the
+  solver's multipliers.
+
+A new scheme is one new class registered in :mod:`ocgroupoid.nlp.schemes`.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass
+from typing import Callable, ClassVar
+
+import casadi as ca
+import numpy as np
+
+from ...lie.retraction import Retraction, retraction
+from ...model.problem import Problem
+from ..assembly import Block
+from ..layout import Layout
+from ..stages import Stages
+
+Pick = Callable[[np.ndarray], ca.MX]  # w-indices -> the gathered graph, shaped like them
+
+
+@dataclass
+class Readout:
+    """Graphs of w that a scheme reads off a point (times as fractions of T)."""
+
+    steps: ca.MX  # dim y x N: algebra increments a_k, s_{k+1} = step(s_k, tau(a_k))
+    states: ca.MX  # ds x (N+1): s_0 and the states reached by the exact reconstruction
+    velocity_t: np.ndarray
+    velocities: ca.MX  # dim y x len(velocity_t)
+    control_t: np.ndarray
+    controls: ca.MX  # n_u x len(control_t)
+
+
+class Scheme(ABC):
+    """A discretisation of a problem on N intervals (module docstring)."""
+
+    name: ClassVar[str]
+    accuracy: ClassVar[int]  # the order at which costs and trajectories converge
+    problem_order: ClassVar[int]  # 2: second-order problems (Ltilde); 1: first-order (l)
+    summary: ClassVar[str]
+
+    #: w-indices set by :meth:`index`
+    states: np.ndarray  # ds x (N+1) node states
+    end_velocity: np.ndarray  # dim y: the velocity at t = T (final conditions read it)
+
+    def __init__(self, problem: Problem, N: int, retraction_name: str, rule: str) -> None:
+        self.problem, self.N, self.rule = problem, N, rule
+        self.retraction = retraction_name
+        self.retractions: list[Retraction] = [retraction(retraction_name, f.group)
+                                              for f in problem.groupoid.factors]
+        self.stages = Stages(problem, self.retractions)
+        self.layout: Layout | None = None
+
+    @property
+    @abstractmethod
+    def n_stage(self) -> int:
+        """Number of the scheme's own decision variables (first in x)."""
+
+    @abstractmethod
+    def index(self, layout: Layout) -> None:
+        """Arrange the stage variables; set :attr:`states`, :attr:`end_velocity`."""
+
+    @abstractmethod
+    def blocks(self) -> list[Block]:
+        """The stage Functions with their index columns."""
+
+    @abstractmethod
+    def point(self, XI: ca.MX, pick: Pick) -> list[tuple[np.ndarray, ca.MX]]:
+        """Values of the NLP point for interval velocities XI (dim y x N): pairs of w-indices
+        and graphs, for :meth:`Layout.compose`."""
+
+    @abstractmethod
+    def readout(self, pick: Pick) -> Readout:
+        """What a solution reports, as graphs of w."""
+
+    @abstractmethod
+    def euler_lagrange_residual(self, grad: np.ndarray, w: np.ndarray) -> np.ndarray:
+        """Residuals (one row per interior node, dim y columns) of the discrete
+        Euler-Lagrange equations, from the gradient over w of the action sum plus the path
+        constraints times their multipliers."""
+
+    @abstractmethod
+    def unpack(self, w: np.ndarray) -> dict[str, np.ndarray]:
+        """The scheme's variables of a numeric point w = [x; p], by name."""
+
+    def step_over(self, pick: Pick) -> ca.MX:
+        """The states s_1..s_N reached from s_0 by the steps (exact reconstruction)."""
+        assert self.layout is not None
+        return self.stages.step.mapaccum(self.N)(pick(self.layout.s0), self.readout_steps(pick))
+
+    @abstractmethod
+    def readout_steps(self, pick: Pick) -> ca.MX:
+        """The algebra increments a_k (dim y x N) of a point."""

@@ -1,0 +1,48 @@
+"""The stage Functions every scheme shares: the step on the groupoid, the charts of the final
+states, and the user's final conditions.
+
+``step(s, a)`` is the product of the factors' steps by the algebra increment ``a``
+(``a = h xi_k`` for a constant velocity on the interval): ``s_{k+1} = step(s_k, tau(a))``,
+e.g. ``R_{k+1} = R_k tau(a)`` (seed 000, eq. 27).
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+
+from ..lie.retraction import Retraction
+from ..model.problem import Problem
+
+
+class Stages:
+    """Scheme-independent stage Functions of one problem under one choice of retraction."""
+
+    def __init__(self, problem: Problem, retractions: list[Retraction]) -> None:
+        G = problem.groupoid
+        self.problem, self.retractions = problem, retractions
+        ds, dg = G.state_size, G.algebra_dim
+        s, a, y = ca.SX.sym("s", ds), ca.SX.sym("a", dg), ca.SX.sym("y", dg)
+        self.step = ca.Function("step", [s, a], [G.step(s, retractions, a)],
+                                ["s", "a"], ["s_next"])
+        target = ca.SX.sym("target", G.target_size)
+        charts = [f.chart(s[ss], target[ts]) for f, ss, ts in
+                  zip(G.factors, G.state_layout.slices, G.target_layout.slices)]
+        self.chart = ca.Function("chart", [s, target], [ca.vertcat(*charts)])
+        ends = [c for _, c in problem.final_conditions]
+        self.final_conditions = ca.Function(
+            "final_conditions", [s, y, problem.P],
+            [ca.substitute(ca.vertcat(*ends), ca.vertcat(problem.q, problem.y),
+                           ca.vertcat(G.base(s), y)) if ends else ca.SX(0, 1)],
+            ["s", "y", "P"], ["residual"])
+
+    @property
+    def controls(self) -> ca.SX:
+        """The reported controls as one column of expressions in (q, y[, dy], P)."""
+        pb = self.problem
+        return ca.vertcat(*[c for _, c in pb.controls]) if pb.controls else ca.SX(0, 1)
+
+    @property
+    def constraints(self) -> ca.SX:
+        """All path constraints (Phi or psi) as one column."""
+        pb = self.problem
+        return ca.vertcat(*[c for _, c in pb.constraints]) if pb.constraints else ca.SX(0, 1)

@@ -1,0 +1,358 @@
+"""One NLP from a problem and a discretisation.
+
+The scheme (:mod:`ocgroupoid.nlp.schemes`) lays out its variables and stage Functions; the
+transcription adds the final conditions shared by every scheme — the chart coordinates of
+each prescribed final state (3 equations for a rotation, 2 for a point of S^2, one per
+prescribed component of R^n) and the user's final conditions — assembles the derivatives
+(:mod:`ocgroupoid.nlp.assembly`) and sets IPOPT up. Initial states enter through p
+(:mod:`ocgroupoid.nlp.layout`).
+
+Three computations that both the Python path and exported C need are CasADi Functions built
+here once: the geodesic guesses as graphs of p (:attr:`Transcription.guess_function`), the
+NLP point of a guess (:attr:`point_function`) and the read-out of a solution
+(:attr:`readout_function`). The packing of p is :class:`~ocgroupoid.nlp.parameters.
+ParameterValues`.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from functools import cached_property
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from ..errors import BoundaryError, ConfigError
+from ..lie.retraction import RETRACTION_NAMES
+from ..model.problem import Boundary, Problem
+from ..model.values import check_horizon
+from .assembly import Block, Kind, assemble
+from .boundary import FinalConditions
+from .layout import Layout, Masks
+from .parameters import ParameterValues
+from .schemes import DEFAULT_RULE, DEFAULT_SCHEME, SCHEME_NAMES, make_scheme
+from .schemes.order2 import columns, stage_function
+
+DEFAULT_IPOPT: dict[str, Any] = {
+    "tol": 1e-10,
+    "constr_mult_init_max": 0.0,  # start from zero multipliers: saves a factorisation
+    "max_iter": 500,
+    # a start that wanders off (|x| > 1e8: no physical velocity or state) stops at once as
+    # Diverging_Iterates; left to run, MUMPS grows its workspace each iteration and one bad
+    # start of a multi-start took minutes (heavy top, N=256, "long way" guess)
+    "diverging_iterates_tol": 1e8,
+    "print_level": 0,
+    "sb": "yes",
+}
+
+#: outputs of the read-out Function, in the order exported C reads them (enum ocg_output)
+READOUT_OUTPUTS = ("x_solution", "t", "states", "node_states", "velocity_t", "velocities",
+                   "control_t", "controls", "multiplier_t", "multipliers",
+                   "final_multipliers", "steps")
+C_READOUT_OUTPUTS = READOUT_OUTPUTS[:11]
+
+
+def nlpsol_options(ipopt: dict[str, Any] | None, fns: dict[str, ca.Function]) -> dict[str, Any]:
+    """Options of ``casadi.nlpsol``: IPOPT's (defaults overridden by ``ipopt``) and the
+    assembled derivative functions in its cache, so that it derives none itself."""
+    opts: dict[str, Any] = {f"ipopt.{k}": v for k, v in {**DEFAULT_IPOPT, **(ipopt or {})}.items()}
+    opts.update({"print_time": False, "calc_lam_p": False, "show_eval_warnings": False,
+                 "cache": {k: fns[k] for k in ("nlp_grad_f", "nlp_jac_g", "nlp_hess_l")}})
+    return opts
+
+
+@dataclass(frozen=True)
+class Discretization:
+    """N intervals, a scheme, a retraction for the group factors, a rule for the constraints."""
+
+    N: int
+    retraction: str = "cayley"
+    rule: str = DEFAULT_RULE
+    scheme: str = DEFAULT_SCHEME
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.N, int) or isinstance(self.N, bool) or self.N < 2:
+            raise ConfigError(f"N must be an integer >= 2, got {self.N!r}")
+        if self.retraction not in RETRACTION_NAMES:
+            raise ConfigError(
+                f"unknown retraction {self.retraction!r}; choose one of "
+                f"{', '.join(RETRACTION_NAMES)}"
+            )
+        if self.scheme not in SCHEME_NAMES:
+            raise ConfigError(f"unknown scheme {self.scheme!r}; choose one of "
+                              f"{', '.join(SCHEME_NAMES)}")
+
+
+@dataclass
+class Guess:
+    """Velocities on the N intervals (N x dim y); the scheme turns them into a point."""
+
+    label: str
+    xi: np.ndarray
+
+
+@dataclass
+class RawResult:
+    """What IPOPT returned for one start, before diagnostics."""
+
+    label: str
+    x: np.ndarray
+    p: np.ndarray
+    lam_g: np.ndarray
+    cost: float
+    status: str
+    success: bool
+    iterations: int
+    solve_seconds: float
+
+
+class Transcription:
+    """The compiled NLP of (problem, discretisation); solve it for any parameters p."""
+
+    def __init__(self, problem: Problem, disc: Discretization,
+                 ipopt: dict[str, Any] | None = None) -> None:
+        t0 = time.perf_counter()
+        if problem.cost is None:
+            raise ConfigError(f"problem {problem.name!r} has no cost; call minimize()")
+        self.problem, self.disc, self.N = problem, disc, disc.N
+        self.scheme = make_scheme(disc.scheme, problem, disc.N, disc.retraction, disc.rule)
+        self.masks = Masks.of(problem.groupoid, problem.end_velocities, problem.start, problem.end)
+        self.layout = Layout(problem, self.masks, self.scheme.n_stage)
+        self.scheme.index(self.layout)
+        self.nx, self.np = self.layout.nx, self.layout.np
+        self.values = ParameterValues(problem, self.masks, self.layout)
+        self.final_check = FinalConditions(problem, self.masks, self.layout, self.scheme.stages)
+        self.pack(T=problem.T or 1.0)  # over-determined final conditions raise here
+        self.blocks = self.scheme.blocks() + self._final_blocks()
+        t1 = time.perf_counter()
+        x, p = ca.MX.sym("x", self.nx), ca.MX.sym("p", self.np)
+        fns = assemble(self.blocks, x, p)
+        t2 = time.perf_counter()
+        self.ng = int(fns["g"].numel())
+        self.nlp = {"x": x, "p": p, "f": fns["f"], "g": fns["g"]}
+        try:
+            self.solver = ca.nlpsol(f"{problem.name}_N{self.N}", "ipopt", self.nlp,
+                                    nlpsol_options(ipopt, fns))
+        except RuntimeError as err:
+            raise ConfigError(f"IPOPT rejected the options {ipopt}: {err}") from None
+        t3 = time.perf_counter()
+        self.f_fun = ca.Function("f", [x, p], [fns["f"]])
+        self.g_fun = ca.Function("g", [x, p], [fns["g"]])
+        self.build_seconds = time.perf_counter() - t0
+        #: where the build time went: stage graphs and layout, derivative assembly, IPOPT setup
+        self.build_phases = {"stages": t1 - t0, "assembly": t2 - t1, "nlpsol": t3 - t2}
+
+    def _final_blocks(self) -> list[Block]:
+        G, N, lay, sch = self.problem.groupoid, self.N, self.layout, self.scheme
+        ds, dg, nt = G.state_size, G.algebra_dim, G.target_size
+        npar = self.problem.P.numel()
+        out = []
+        rows = np.concatenate(self.masks.end_state)
+        if rows.any():
+            keep = np.flatnonzero(rows).tolist()
+            chart = sch.stages.chart
+            labels = [f"final.{f.state} " + (f"component {j}" if f.componentwise
+                                             else f"(chart coordinate {j + 1})")
+                      for f, m in zip(G.factors, self.masks.end_state)
+                      for j in np.flatnonzero(m)]
+            out.append(Block("final", stage_function(
+                "final", [ds, nt], lambda s, tg: (ca.SX(1, 1), chart(s, tg)[keep])),
+                columns(sch.states[:, N], lay.end, ncols=1), nt, Kind.FINAL, labels, [""]))
+        if self.problem.final_conditions:
+            ends = sch.stages.final_conditions
+            labels = [f"final condition {n!r}" for n, c in self.problem.final_conditions
+                      for _ in range(c.numel())]
+            out.append(Block("final_conditions", stage_function(
+                "final_conditions", [ds, dg, npar],
+                lambda s, v, par: (ca.SX(1, 1), ends(s, v, par))),
+                columns(sch.states[:, N], sch.end_velocity, lay.P, ncols=1), npar,
+                Kind.FINAL_CONDITION, labels, [""]))
+        return out
+
+    # -- constraint rows ----------------------------------------------------------------
+
+    def rows(self, kind: Kind) -> np.ndarray:
+        """Global constraint rows of every block of ``kind``, in block order: shaped
+        (rows per column, columns) — for the path constraints, one column per time."""
+        parts = [b.g_rows for b in self.blocks if b.kind is kind]
+        return np.hstack(parts) if parts else np.zeros((0, 0), dtype=np.int64)
+
+    def path_times(self) -> np.ndarray:
+        """Times of the path-constraint columns, as fractions of T."""
+        parts = [b.times for b in self.blocks if b.kind is Kind.PATH]
+        return np.concatenate(parts) if parts else np.zeros(0)
+
+    def row_labels(self) -> list[str]:
+        """A readable name for every constraint row, e.g. ``final.R (chart coordinate 2)``."""
+        return [label for b in self.blocks for label in b.labels()]
+
+    # -- parameters ---------------------------------------------------------------------
+
+    def pack(self, params: dict[str, Any] | None = None, initial: dict[str, Any] | None = None,
+             final: dict[str, Any] | None = None, T: float | None = None) -> np.ndarray:
+        """The parameter vector p: problem defaults overridden by the arguments.
+
+        Overrides may change values but not which components are prescribed (that is the
+        NLP's structure: change it on the Problem and build again).
+        """
+        pb, G = self.problem, self.problem.groupoid
+        start = Boundary(dict(pb.start.states), dict(pb.start.velocities))
+        end = Boundary(dict(pb.end.states), dict(pb.end.velocities))
+        for bc, upd, label in ((start, initial, "initial"), (end, final, "final")):
+            for name, value in (upd or {}).items():
+                if name in G.state_names:
+                    bc.states[name] = pb.check_state(name, value, label)
+                elif name in G.velocity_names and pb.end_velocities:
+                    bc.velocities[name] = pb.check_velocity(name, value, label)
+                else:
+                    raise ConfigError(f"{label}.{name}: unknown state or velocity")
+        if Masks.of(G, pb.end_velocities, start, end) != self.masks:
+            raise BoundaryError(
+                "the overrides change which boundary components are prescribed; that changes "
+                "the NLP: set them on the Problem and build a new Transcription"
+            )
+        if T is None and pb.T is None:
+            raise ConfigError("no horizon: give T or call problem.horizon(T)")
+        values = np.zeros(self.values.size)
+        P = pb.parameter_values(params)
+        for b in self.values.blocks:
+            end_name, _, name = b.key.partition(".")
+            bc = {"initial": start, "final": end}.get(end_name)
+            if bc is None:
+                given = check_horizon(pb.T if T is None else T) if b.key == "T" else \
+                    P[pb.parameter_slices[b.key]]
+            else:
+                given = bc.states.get(name, bc.velocities.get(name))
+            if given is not None:
+                values[b.values] = [0.0 if c is None else c for c in np.atleast_1d(
+                    np.asarray(given, dtype=object))]
+        p = self.values.pack(values)
+        self.final_check.check(p)
+        return p
+
+    def part(self, p: np.ndarray, key: str) -> np.ndarray:
+        """One part of p: ``P`` (physical parameters), ``start``/``end`` (packed targets),
+        ``V0``/``VN`` (end velocities) or ``T``."""
+        return np.asarray(p)[self.layout.p_slices[key]]
+
+    def horizon_of(self, p: np.ndarray) -> float:
+        return float(self.part(p, "T")[0])
+
+    # -- the shared Functions -----------------------------------------------------------
+
+    @cached_property
+    def guess_labels(self) -> list[str]:
+        """Labels of the geodesic guesses: the all-preferred one first, then one per
+        alternative of each factor (the others kept preferred)."""
+        return self._guesses(ca.MX.sym("p", self.np))[0]
+
+    @cached_property
+    def guess_function(self) -> ca.Function:
+        """``guesses(p) -> (XI_1, ..., XI_m)``: the geodesic guesses of every factor as interval
+        velocities (dim y x N), as graphs of p."""
+        p = ca.MX.sym("p", self.np)
+        labels, outs = self._guesses(p)
+        return ca.Function("guesses", [p], outs, ["p"], [f"guess{i}" for i in range(len(outs))])
+
+    def _guesses(self, p: ca.MX) -> tuple[list[str], list[ca.MX]]:
+        G, N, lay = self.problem.groupoid, self.N, self.layout.p_slices
+        T = p[lay["T"].start]
+        start, end, V0, VN = (p[lay[k]] for k in ("start", "end", "V0", "VN"))
+        per = [f.guesses(r, start[ts], end[ts], V0[vs], VN[vs], T, N, self.masks.factor(G, i))
+               for i, (f, r, ts, vs) in enumerate(zip(
+                   G.factors, self.scheme.retractions, G.target_layout.slices,
+                   G.velocity_layout.slices))]
+        first = [alts[0] for alts in per]
+        labels = [" + ".join(name for name, _ in first)]
+        outs = [ca.vertcat(*[xi for _, xi in first])]
+        for i, alts in enumerate(per):
+            for name, xi in alts[1:]:
+                labels.append(name)
+                outs.append(ca.vertcat(*[a[0][1] if j != i else xi for j, a in enumerate(per)]))
+        return labels, outs
+
+    @cached_property
+    def point_function(self) -> ca.Function:
+        """``point(XI, p) -> x``: the NLP point of interval velocities XI (dim y x N)."""
+        XI = ca.MX.sym("XI", self.problem.groupoid.algebra_dim, self.N)
+        p = ca.MX.sym("p", self.np)
+        w = ca.vertcat(ca.MX.zeros(self.nx), p)  # free initial components start at zero
+        pick = lambda idx: self.layout.gather(w, idx)  # noqa: E731
+        x0 = self.layout.compose(self.scheme.point(XI, pick))
+        return ca.Function("point", [XI, p], [x0], ["XI", "p"], ["x"])
+
+    @cached_property
+    def readout_function(self) -> ca.Function:
+        """``readout(x, p, lam_g)``: what a solution reports (:data:`READOUT_OUTPUTS`), each a
+        (width x count) matrix with one column per time."""
+        G = self.problem.groupoid
+        x, p, lam = ca.MX.sym("x", self.nx), ca.MX.sym("p", self.np), ca.MX.sym("lam_g", self.ng)
+        w = ca.vertcat(x, p)
+        pick = lambda idx: self.layout.gather(w, idx)  # noqa: E731
+        r = self.scheme.readout(pick)
+        x_rec = self.layout.compose([(np.arange(self.nx), x), (self.scheme.states[:, 1:],
+                                                               r.states[:, 1:])])
+        T = pick(self.layout.T)
+        s = ca.SX.sym("s", G.state_size)
+        shown = ca.Function("shown", [s], [G.shown(s)])
+        path, final = self.rows(Kind.PATH), self.rows(Kind.FINAL)
+        lam_path = ca.reshape(lam[path.ravel(order="F").tolist()], *path.shape) if path.size \
+            else ca.MX(0, 1)
+        lam_final = lam[final.ravel().tolist()] if final.size else ca.MX(0, 1)
+        times = lambda frac: T * ca.DM(np.asarray(frac, dtype=float)).T  # noqa: E731
+        outs = [x_rec, times(np.arange(self.N + 1) / self.N),
+                shown.map(self.N + 1)(r.states), r.states, times(r.velocity_t), r.velocities,
+                times(r.control_t), r.controls, times(self.path_times()), lam_path, lam_final,
+                r.steps]
+        return ca.Function("readout", [x, p, lam], [ca.densify(o) for o in outs],
+                           ["x", "p", "lam_g"], list(READOUT_OUTPUTS))
+
+    # -- numeric evaluation -------------------------------------------------------------
+
+    def guesses(self, p: np.ndarray) -> list[Guess]:
+        """The geodesic guesses (see :attr:`guess_labels`) of the instance p."""
+        outs = self.guess_function(p)
+        outs = outs if isinstance(outs, (list, tuple)) else [outs]
+        return [Guess(label, np.array(xi).T) for label, xi in zip(self.guess_labels, outs)]
+
+    def point(self, guess: Guess, p: np.ndarray) -> np.ndarray:
+        """NLP point of a guess (:attr:`point_function`)."""
+        xi = np.asarray(guess.xi, dtype=float)
+        dg = self.problem.groupoid.algebra_dim
+        if xi.shape != (self.N, dg):
+            raise ConfigError(f"guess {guess.label!r} has shape {xi.shape}, "
+                              f"expected {(self.N, dg)}")
+        return np.array(self.point_function(xi.T, p)).ravel()
+
+    def readout(self, x: np.ndarray, p: np.ndarray, lam_g: np.ndarray | None = None
+                ) -> dict[str, np.ndarray]:
+        """The read-out of a point, one row per time (``x_solution``: a flat vector)."""
+        lam = np.zeros(self.ng) if lam_g is None else lam_g
+        outs = self.readout_function(x, p, lam)
+        res = {k: np.array(v).T for k, v in zip(READOUT_OUTPUTS, outs)}
+        res["x_solution"] = res["x_solution"].ravel()
+        for k in ("t", "velocity_t", "control_t", "multiplier_t"):
+            res[k] = res[k].ravel()
+        res["final_multipliers"] = res["final_multipliers"].ravel()
+        return res
+
+    def unpack(self, x: np.ndarray, p: np.ndarray) -> dict[str, np.ndarray]:
+        """The scheme's variables of an NLP point, by name (e.g. ``xi``, ``s``, ``T``)."""
+        return self.scheme.unpack(np.concatenate([np.asarray(x, dtype=float).ravel(), p]))
+
+    # -- solving ------------------------------------------------------------------------
+
+    def solve(self, guess: Guess, p: np.ndarray | None = None) -> RawResult:
+        """Run IPOPT from ``guess`` with parameters ``p`` (default: the problem's)."""
+        p = self.pack() if p is None else np.asarray(p, dtype=float)
+        x0 = self.point(guess, p)
+        t0 = time.perf_counter()
+        r = self.solver(x0=x0, p=p, lbg=0, ubg=0)
+        seconds = time.perf_counter() - t0
+        stats = self.solver.stats()
+        status = str(stats["return_status"])
+        iterations = 0 if status == "Not_Enough_Degrees_Of_Freedom" else int(stats["iter_count"])
+        return RawResult(guess.label, np.array(r["x"]).ravel(), p, np.array(r["lam_g"]).ravel(),
+                         float(r["f"]), status, bool(stats["success"]), iterations, seconds)

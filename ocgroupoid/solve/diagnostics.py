@@ -1,0 +1,101 @@
+"""Checks of a discrete solution that do not trust the solver.
+
+(a) The discrete (constrained) second-order Euler-Lagrange residual with the solver's
+    multipliers of Phi_d (seed 000, eq. 13, 18): the gradient of ``S + sum_k lambda^k Phi_d``
+    comes from CasADi's own AD of the NLP (not from the stage derivatives IPOPT used); the
+    scheme turns it into the residual of its discrete equations
+    (:meth:`~ocgroupoid.nlp.schemes.base.Scheme.euler_lagrange_residual`).
+(b) Distance of every node state from its manifold (|R^T R - I|, ||Gamma| - 1|).
+(c) Boundary residuals (each factor's distance to its target), and the largest constraint
+    residual.
+(d) Replay (:mod:`ocgroupoid.solve.replay`): the reported controls driven through the
+    continuous dynamics with SciPy, and the terminal error against the target.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from ..nlp.assembly import Kind
+from ..nlp.transcription import Transcription
+from .replay import Replay, terminal_errors
+
+
+def euler_lagrange_residual(tr: Transcription, x: np.ndarray, p: np.ndarray,
+                            lam_g: np.ndarray) -> np.ndarray:
+    """The scheme's discrete Euler-Lagrange residuals (one row per interior node)."""
+    lam = np.zeros(tr.ng)
+    rows = tr.rows(Kind.PATH).ravel()
+    lam[rows] = lam_g[rows]
+    xs, ps, ls = ca.MX.sym("x", tr.nx), ca.MX.sym("p", tr.np), ca.MX.sym("lam", tr.ng)
+    f, g = tr.nlp["f"], tr.nlp["g"]
+    ext = ca.substitute([f + ca.dot(ls, g)], [tr.nlp["x"], tr.nlp["p"]], [xs, ps])[0]
+    grad = np.array(ca.Function("grad", [xs, ps, ls], [ca.gradient(ext, xs)])(x, p, lam)).ravel()
+    w = np.concatenate([np.asarray(x, dtype=float).ravel(), p])
+    return tr.scheme.euler_lagrange_residual(np.concatenate([grad, np.zeros(tr.np)]), w)
+
+
+def conserved_values(tr: Transcription, states: np.ndarray, velocities: np.ndarray,
+                     p: np.ndarray) -> dict[str, np.ndarray]:
+    """Every declared conserved quantity C(q, y) at the nodes, from the node states and the
+    read-out's node velocities (second-order problems, where quantities are declared
+    conserved, sample velocities at the nodes): its drift is the discretisation's."""
+    pb, G = tr.problem, tr.problem.groupoid
+    P = tr.part(p, "P")
+    s = ca.SX.sym("s", G.state_size)
+    out = {}
+    for name, C in pb.invariants:
+        fun = ca.Function("C", [s, pb.y, pb.P], [ca.substitute(C, pb.q, G.base(s))])
+        out[name] = np.array(fun.map(len(velocities))(states.T, velocities.T, P)).T
+    return out
+
+
+def manifold_distance(tr: Transcription, states: np.ndarray) -> dict[str, float]:
+    """Largest distance of the node states from each factor's manifold."""
+    G = tr.problem.groupoid
+    return {f.state: max(f.distance(row[ss]) for row in states)
+            for f, ss in zip(G.factors, G.state_layout.slices)}
+
+
+def step_sizes(tr: Transcription, steps: np.ndarray) -> dict[str, float]:
+    """Largest algebra step |a_k| of every velocity whose retraction has a singular step
+    (Cayley at pi, the first-order rule at pi/2): how close a grid comes to it."""
+    G = tr.problem.groupoid
+    return {f.velocity: float(np.max(np.linalg.norm(steps[:, vs], axis=1)))
+            for f, ret, vs in zip(G.factors, tr.scheme.retractions, G.velocity_layout.slices)
+            if np.isfinite(ret.step_limit)}
+
+
+def diagnose(tr: Transcription, x: np.ndarray, p: np.ndarray, lam_g: np.ndarray,
+             out: dict[str, np.ndarray], replay: bool = True, solved: bool = True
+             ) -> dict[str, Any]:
+    """All checks (a)-(d) as a JSON-friendly dict, for the read-out ``out`` of (x, p, lam_g).
+    The replay runs for solved points only: the controls of a failed solve can be huge or
+    NaN, and integrating them can take hours."""
+    g = np.array(tr.g_fun(x, p)).ravel()
+    r = euler_lagrange_residual(tr, x, p, lam_g)
+    path = tr.rows(Kind.PATH).ravel()
+    s = out["node_states"]
+    d: dict[str, Any] = {
+        "euler_lagrange_residual_max": float(np.max(np.abs(r))) if r.size else 0.0,
+        "euler_lagrange_residual_per_node": np.max(np.abs(r), axis=1).tolist() if r.size else [],
+        "manifold_distance": manifold_distance(tr, s),
+        "final_residual": terminal_errors(tr, s[-1], None, p),
+        "reconstruction_residual_max": float(np.max(np.abs(
+            g[tr.rows(Kind.RECONSTRUCTION).ravel()]))),
+        "constraint_residual_max": float(np.max(np.abs(g[path]))) if path.size else 0.0,
+        "step_angle_max": step_sizes(tr, out["steps"]),
+    }
+    if tr.problem.invariants:
+        values = conserved_values(tr, s, out["velocities"], p)
+        d["conserved_drift"] = {name: float(np.max(np.abs(C - C[0])))
+                                for name, C in values.items()}
+    if replay and not solved:
+        d["replay"] = {"available": False,
+                       "reason": "not replayed: IPOPT did not solve, the controls are no answer"}
+    elif replay:
+        d["replay"] = Replay(tr).run(out, p)
+    return d

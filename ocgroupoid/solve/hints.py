@@ -1,0 +1,41 @@
+"""What went wrong and what to try: hints from IPOPT's status and the last iterate."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..nlp.transcription import RawResult, Transcription
+
+HINTS = {
+    "Infeasible_Problem_Detected": "the constraints and boundary conditions look incompatible: "
+    "check the final values (are they reachable?) and the prescribed components; "
+    "`ocgroupoid check` lists them",
+    "Not_Enough_Degrees_Of_Freedom": "more equality constraints than variables: free a "
+    "boundary value or drop a constraint (`ocgroupoid check` names the redundant ones)",
+    "Maximum_Iterations_Exceeded": "try multistart, continuation from a coarser N, a longer "
+    "horizon, or a larger solver.max_iter",
+    "Invalid_Number_Detected": "a stage evaluated to NaN/Inf: with first_order a step turned "
+    "by pi/2 or more; increase N or use the cayley retraction",
+    "Diverging_Iterates": "the iterates left every physical scale (|x| > 1e8): start from "
+    "another guess (multistart, continuation) or raise solver.ipopt.diverging_iterates_tol if "
+    "your variables are that large",
+    "Restoration_Failed": "IPOPT lost feasibility: try multistart or continuation",
+    "Search_Direction_Becomes_Too_Small": "the problem may be degenerate: check for redundant "
+    "boundary conditions",
+    "Error_In_Step_Computation": "the KKT matrix is singular: check for redundant boundary "
+    "conditions or constraints",
+}
+
+
+def hint_for(tr: Transcription, r: RawResult, steps: np.ndarray) -> str:
+    """The hint for a failed result; ``steps`` are its algebra increments (N x dim y)."""
+    if r.success:
+        return ""
+    parts = [HINTS.get(r.status, "try multistart or continuation")]
+    G = tr.problem.groupoid
+    for f, ret, vs in zip(G.factors, tr.scheme.retractions, G.velocity_layout.slices):
+        step = float(np.max(np.linalg.norm(steps[:, vs], axis=1)))
+        if step > 0.5 * ret.step_limit:
+            parts.append(f"{f.velocity} turns {step:.3g} rad in one step ({ret.name} "
+                         f"is singular at {ret.step_limit:.2f}); increase N")
+    return "; ".join(parts)

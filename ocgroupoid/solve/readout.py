@@ -1,0 +1,64 @@
+"""A Solution from one IPOPT result: the read-out Function evaluated, then diagnosed.
+
+Everything the Solution reports about the trajectory — node states by exact reconstruction,
+velocities and controls with their time stamps, the multipliers lambda^k of Phi_d and of
+the final conditions — comes from
+:attr:`~ocgroupoid.nlp.transcription.Transcription.readout_function`, the Function that
+exported C evaluates too.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import replace
+from typing import Any, Sequence
+
+import numpy as np
+
+from ..nlp.assembly import Kind
+from ..nlp.transcription import RawResult, Transcription
+from .diagnostics import diagnose
+from .hints import hint_for
+from .solution import Solution
+
+
+def make_solution(tr: Transcription, r: RawResult, minima: Sequence[Any],
+                  replay: bool = True) -> Solution:
+    """Assemble a Solution (trajectory, controls, multipliers, diagnostics) from a result."""
+    pb, G = tr.problem, tr.problem.groupoid
+    t0 = time.perf_counter()
+    g_nlp = np.array(tr.g_fun(r.x, r.p)).ravel()
+    recon_nlp = float(np.max(np.abs(g_nlp[tr.rows(Kind.RECONSTRUCTION).ravel()])))
+    out = tr.readout(r.x, r.p, r.lam_g)
+    r = replace(r, x=out["x_solution"])
+    shown = out["states"]
+    states, k = {}, 0
+    for f in G.factors:
+        n = int(np.prod(f.shown_shape))
+        states[f.state] = shown[:, k:k + n].reshape(-1, *f.shown_shape)
+        k += n
+    velocities = {f.velocity: out["velocities"][:, vs]
+                  for f, vs in zip(G.factors, G.velocity_layout.slices)}
+    mult: dict[str, Any] = {"t": out["multiplier_t"],
+                            "names": [n for n, c in pb.constraints for _ in range(c.numel())]}
+    if out["multipliers"].size:
+        mult["Phi"] = out["multipliers"]
+    if out["final_multipliers"].size:
+        mult["final"] = out["final_multipliers"]
+    diagnostics = diagnose(tr, r.x, r.p, r.lam_g, out, replay=replay, solved=r.success)
+    diagnostics["reconstruction_residual_nlp"] = recon_nlp
+    diagnostics["seconds"] = time.perf_counter() - t0
+    T = tr.horizon_of(r.p)
+    P = tr.part(r.p, "P")
+    params = {name: P[sl].tolist() for name, sl in pb.parameter_slices.items()}
+    return Solution(
+        problem=pb.name, success=r.success, status=r.status, N=tr.N, T=T, cost=r.cost,
+        iterations=r.iterations, solve_seconds=r.solve_seconds,
+        build_seconds=tr.build_seconds,
+        discretization={"scheme": tr.disc.scheme, "retraction": tr.disc.retraction,
+                        "rule": tr.disc.rule, "order": pb.order, "start": r.label},
+        parameters=params, t=out["t"], states=states, velocity_t=out["velocity_t"],
+        velocities=velocities, controls_t=out["control_t"], controls=out["controls"],
+        control_names=[n for n, _ in pb.controls], multipliers=mult, diagnostics=diagnostics,
+        minima=[m.__dict__ for m in minima], hint=hint_for(tr, r, out["steps"]), x=r.x, p=r.p,
+    )

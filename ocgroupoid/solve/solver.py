@@ -1,0 +1,140 @@
+"""Solving: IPOPT from good guesses, multi-start over local minima, coarse-to-fine continuation.
+
+Optimal-control problems on SO(3) have several local minima (a slew may turn the short or
+the long way round). ``multistart`` solves from every geodesic guess (each group factor both
+ways round), the model's own guesses and a few deterministic perturbations, keeps the best
+feasible result and lists the distinct minima met. ``continuation`` solves on coarse grids
+first and interpolates each solution onto the next grid as its initial guess.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Any, Callable, Iterable, Sequence
+
+import numpy as np
+
+from ..errors import ConfigError
+from ..model.problem import Problem
+from ..nlp.schemes import DEFAULT_RULE, DEFAULT_SCHEME
+from ..nlp.transcription import Discretization, Guess, RawResult, Transcription
+from .guesses import geodesic_guesses, interpolate, model_guesses, perturbed_guesses
+from .readout import make_solution
+from .solution import Solution
+
+Progress = Callable[[str], None]
+
+
+def _noop(_: str) -> None:
+    return None
+
+
+@dataclass
+class Minimum:
+    """A distinct local minimum met by multi-start."""
+
+    cost: float
+    label: str
+    status: str
+    iterations: int
+
+
+def distinct_minima(results: Iterable[RawResult], rtol: float = 1e-6, xtol: float = 1e-4
+                    ) -> list[Minimum]:
+    """Successful results grouped into local minima, cheapest first.
+
+    Two results are one minimum when their costs agree to ``rtol`` and their NLP points
+    to ``xtol`` (max-norm, relative to max(1, |x|)): minima of equal cost on different
+    trajectories (mirror images, e.g. the plate-ball's) stay apart.
+    """
+    found: list[tuple[Minimum, np.ndarray]] = []
+    for r in sorted((r for r in results if r.success), key=lambda r: r.cost):
+        if not any(abs(r.cost - m.cost) <= rtol * max(1.0, abs(m.cost))
+                   and np.max(np.abs(r.x - x)) <= xtol * max(1.0, float(np.max(np.abs(x))))
+                   for m, x in found):
+            found.append((Minimum(r.cost, r.label, r.status, r.iterations), r.x))
+    return [m for m, _ in found]
+
+
+class Solver:
+    """A compiled problem: build once, solve for any parameters, boundary values and T.
+
+    >>> solver = compile(problem, N=64)                    # doctest: +SKIP
+    >>> sol = solver.solve(params={"inertia": [2, 1, 1]})  # doctest: +SKIP
+    """
+
+    def __init__(self, problem: Problem, N: int, retraction: str = "cayley",
+                 rule: str = DEFAULT_RULE, ipopt: dict[str, Any] | None = None,
+                 scheme: str = DEFAULT_SCHEME) -> None:
+        self.problem = problem
+        self.ipopt = dict(ipopt or {})
+        self.disc = Discretization(N, retraction, rule, scheme)
+        self.transcription = Transcription(problem, self.disc, self.ipopt)
+        self._coarse: dict[int, Transcription] = {}
+
+    def _at(self, N: int) -> Transcription:
+        if N == self.disc.N:
+            return self.transcription
+        if N not in self._coarse:
+            disc = replace(self.disc, N=N)
+            self._coarse[N] = Transcription(self.problem, disc, self.ipopt)
+        return self._coarse[N]
+
+    def guesses(self, tr: Transcription, p: np.ndarray, multistart: bool | int) -> list[Guess]:
+        """The first geodesic guess; with ``multistart`` every geodesic guess, the model's own
+        and ``multistart`` (True: 3) deterministic perturbations."""
+        geo = geodesic_guesses(tr, p)
+        if not multistart:
+            return geo[:1]
+        count = 3 if multistart is True else int(multistart)
+        return geo + model_guesses(tr, p, geo[0]) + perturbed_guesses(geo[0], tr.horizon_of(p),
+                                                                       count)
+
+    def solve(self, params: dict[str, Any] | None = None, initial: dict[str, Any] | None = None,
+              final: dict[str, Any] | None = None, T: float | None = None,
+              multistart: bool | int = False, continuation: Sequence[int] | None = None,
+              guess: Guess | None = None, replay: bool = True, progress: Progress = _noop
+              ) -> Solution:
+        """Solve with IPOPT and return a diagnosed Solution (``success`` may be False).
+
+        ``multistart``: True (3 perturbations) or the number of perturbed starts, on top of
+        the geodesic and model guesses. ``continuation``: coarser N solved first, in order.
+        """
+        levels = sorted(set(int(n) for n in (continuation or [])))
+        if any(n >= self.disc.N for n in levels):
+            raise ConfigError(f"continuation grids must be coarser than N={self.disc.N}: {levels}")
+        results: list[RawResult] = []
+        seeds: list[Guess] | None = [guess] if guess is not None else None
+        prev: tuple[Transcription, RawResult] | None = None
+        for n in [*levels, self.disc.N]:
+            tr = self._at(n)
+            p = tr.pack(params, initial, final, T)
+            if prev is not None:
+                starts = [interpolate(prev[0], prev[1].x, prev[1].p, n)]
+            else:
+                starts = seeds or self.guesses(tr, p, multistart)
+            level: list[RawResult] = []
+            for i, g in enumerate(starts):
+                progress(f"N={n}: start {i + 1}/{len(starts)} ({g.label})")
+                level.append(tr.solve(g, p))
+            if prev is None:
+                results = level
+            best = min(level, key=lambda r: (not r.success, r.cost))
+            prev = (tr, best)
+        assert prev is not None
+        tr, best = prev
+        progress("diagnostics")
+        return make_solution(tr, best, distinct_minima(results), replay)
+
+
+def compile(problem: Problem, N: int = 64, retraction: str = "cayley", rule: str = DEFAULT_RULE,
+            ipopt: dict[str, Any] | None = None, scheme: str = DEFAULT_SCHEME) -> Solver:
+    """Build the NLP of ``problem`` on N intervals once; see :class:`Solver`."""
+    return Solver(problem, N, retraction, rule, ipopt, scheme)
+
+
+def solve(problem: Problem, N: int = 64, retraction: str = "cayley", rule: str = DEFAULT_RULE,
+          ipopt: dict[str, Any] | None = None, scheme: str = DEFAULT_SCHEME,
+          **kwargs: Any) -> Solution:
+    """Build and solve in one call; ``kwargs`` go to :meth:`Solver.solve`."""
+    return compile(problem, N, retraction, rule, ipopt, scheme).solve(**kwargs)
