@@ -10,6 +10,19 @@ import numpy as np
 from .solve.solution import write_atomic
 
 
+def control_curve(sol: Any, per_piece: int = 12) -> tuple[np.ndarray, np.ndarray]:
+    """The control polynomial sampled densely, piece by piece, with a NaN row between pieces
+    so that a jump at a breakpoint is drawn as a jump."""
+    x = np.asarray(sol.control_ppoly["x"], dtype=float)
+    ts, us = [], []
+    for a, b in zip(x[:-1], x[1:]):
+        t = np.linspace(a, b, per_piece)
+        ts += [t, [np.nan]]
+        us += [sol.control(np.clip(t, a, b - 1e-12 * max(1.0, abs(b)))),
+               np.full((1, sol.controls.shape[1]), np.nan)]
+    return np.concatenate(ts), np.vstack(us)
+
+
 def plot_solution(sol: Any, path: str | Path, dpi: int = 110) -> Path:
     """Write a PNG: one panel per quantity; rotations drawn as body axes on the unit sphere."""
     import io
@@ -27,7 +40,11 @@ def plot_solution(sol: Any, path: str | Path, dpi: int = 110) -> Path:
     for k, v in sol.velocities.items():
         panels.append((f"velocity {k}", sol.velocity_t, v,
                        [f"{k}{i + 1}" for i in range(v.shape[1])]))
-    if sol.controls.size:
+    if sol.controls.size and sol.control_ppoly:
+        t, u = control_curve(sol)
+        panels.append(("controls (the scheme's polynomial; samples marked)", t, u,
+                       sol.control_names))
+    elif sol.controls.size:
         panels.append(("controls", sol.controls_t, sol.controls, sol.control_names))
     phi = np.asarray(sol.multipliers.get("Phi", []), dtype=float)
     if phi.size:
@@ -42,7 +59,9 @@ def plot_solution(sol: Any, path: str | Path, dpi: int = 110) -> Path:
         ax = fig.add_subplot(rows, cols, i + 1)
         y = np.atleast_2d(np.asarray(y))
         for j in range(y.shape[1]):
-            ax.plot(t, y[:, j], label=labels[j] if j < len(labels) else str(j))
+            line, = ax.plot(t, y[:, j], label=labels[j] if j < len(labels) else str(j))
+            if title.startswith("controls (") and j < sol.controls.shape[1]:
+                ax.plot(sol.controls_t, sol.controls[:, j], ".", ms=3, color=line.get_color())
         ax.set_title(title)
         ax.set_xlabel("t")
         ax.grid(alpha=0.3)

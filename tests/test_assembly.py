@@ -29,8 +29,10 @@ def reference(tr) -> ca.Function:
 @pytest.mark.parametrize("factory", [rigid_body, free_end_velocity, minimum_acceleration,
                                      rolling, heavy_top, plate_ball])
 @pytest.mark.parametrize("N", [3, 24])
-def test_scattered_derivatives_equal_automatic_differentiation(factory, N: int) -> None:
-    tr = og.compile(factory(), N=N).transcription
+@pytest.mark.parametrize("scheme", og.nlp.SCHEME_NAMES)
+def test_scattered_derivatives_equal_automatic_differentiation(factory, N: int,
+                                                               scheme: str) -> None:
+    tr = og.compile(factory(), N=N, scheme=scheme).transcription
     p = tr.pack()
     rng = np.random.default_rng(N)
     x = rng.normal(size=tr.nx) * 0.3

@@ -65,7 +65,8 @@ def test_python_m_solves_the_canonical_problem(tmp_path) -> None:
 
 def test_resolve_with_changed_inertia_matches_the_api(tmp_path) -> None:
     costs = {}
-    for label, extra in (("default", []), ("changed", ["--set", "parameters.inertia=[2, 1.5, 0.8]"])):
+    changed = ["--set", "parameters.inertia=[2, 1.5, 0.8]"]
+    for label, extra in (("default", []), ("changed", changed)):
         out = tmp_path / f"{label}.json"
         r = runner.invoke(app, ["solve", str(SO3), "-q", "--set", "horizon.N=24", "--set",
                                 "final.R={rotvec: [0.5, -0.4, 1.0]}", *extra, "--out", str(out)])

@@ -51,20 +51,37 @@ initial:
   dtheta: [0.0, 0.0]
 final: {Gamma: [0.0, 0.0, 1.0], Omega: [0.0, 0.0, null], dtheta: [0.0, 0.0]}
 """
-CASES: list[Path | str] = [*PROBLEMS, SPHERE_AND_PAIR]
+ORDER4 = ["so3_rest_to_rest", "heavy_top_rotors", "plate_ball_rotating"]  # one of each kind
 
 
-def case_id(case: Path | str) -> str:
-    return case.stem if isinstance(case, Path) else "custom_heavy_top"
+@dataclass(frozen=True)
+class Case:
+    """A problem file (or inline YAML) exported with a scheme."""
+
+    source: Path | str
+    scheme: str = "order2"
+
+    @property
+    def id(self) -> str:
+        name = self.source.stem if isinstance(self.source, Path) else "custom_heavy_top"
+        return name if self.scheme == "order2" else f"{name}-{self.scheme}"
 
 
-def load_case(case: Path | str, folder: Path) -> files.Config:
+CASES = [Case(c) for c in [*PROBLEMS, SPHERE_AND_PAIR]] + \
+    [Case(ROOT / "problems" / f"{name}.yaml", "order4") for name in ORDER4]
+
+
+def case_id(case: Case) -> str:
+    return case.id
+
+
+def load_case(case: Case, folder: Path) -> files.Config:
     """The validated problem file of a case (inline YAML is written to ``folder``)."""
-    if isinstance(case, str):
-        path = folder / "custom_heavy_top.yaml"
-        path.write_text(case)
-        case = path
-    return files.load(case)
+    source = case.source
+    if isinstance(source, str):
+        source = folder / "custom_heavy_top.yaml"
+        source.write_text(case.source)
+    return files.load(source, [f"discretization.scheme={case.scheme}"])
 N_TEST = 16
 CFLAGS = "-O2 -Wall -Wextra -Werror"
 TOL = 1e-8  # the issue's tolerance on cost and trajectory
@@ -114,13 +131,14 @@ def second_instance(tr: og.Transcription) -> tuple[dict[str, Any], dict[str, Any
 def built(request, tmp_path_factory) -> Built:
     if shutil.which("cc") is None or shutil.which("make") is None:
         pytest.skip("no C compiler (cc) or make on PATH")
-    folder = tmp_path_factory.mktemp(case_id(request.param))
+    folder = tmp_path_factory.mktemp(request.param.id)
     cfg = load_case(request.param, folder)
     f = cfg.file
-    exp = export_c(files.build(cfg), folder / "c", N_TEST, f.discretization.retraction,
-                   f.discretization.rule, f.solver.ipopt, build=True, cflags=CFLAGS)
+    d = f.discretization
+    exp = export_c(files.build(cfg), folder / "c", N_TEST, d.retraction, d.rule, f.solver.ipopt,
+                   build=True, cflags=CFLAGS, scheme=d.scheme)
     sol = exp.solver.solve(replay=False)
-    return Built(case_id(request.param), exp, exp.solver.transcription, sol)
+    return Built(request.param.id, exp, exp.solver.transcription, sol)
 
 
 def run(binary: Path, *args: str) -> subprocess.CompletedProcess:
@@ -148,6 +166,11 @@ def assert_same(c: og.Solution, py: og.Solution) -> None:
                                    err_msg=name)
     np.testing.assert_allclose(c.controls_t, py.controls_t, rtol=0, atol=1e-12)
     np.testing.assert_allclose(c.controls, py.controls, rtol=0, atol=TOL)
+    assert c.discretization["scheme"] == py.discretization["scheme"]
+    np.testing.assert_allclose(c.control_ppoly["x"], py.control_ppoly["x"], rtol=0, atol=1e-12)
+    assert c.control_ppoly["c"].shape == py.control_ppoly["c"].shape
+    np.testing.assert_allclose(c.control_ppoly["c"], py.control_ppoly["c"], rtol=0,
+                               atol=TOL * max(1.0, float(np.max(np.abs(py.control_ppoly["c"])))))
     assert c.control_names == py.control_names
     np.testing.assert_allclose(c.x, py.x, rtol=0, atol=TOL)
     np.testing.assert_allclose(c.p, py.p, rtol=0, atol=1e-14)
@@ -163,7 +186,7 @@ def assert_same(c: og.Solution, py: og.Solution) -> None:
 
 
 @pytest.mark.parametrize("case", CASES, ids=case_id)
-def test_packing_inverts_the_values_of_p(case: Path | str, tmp_path: Path) -> None:
+def test_packing_inverts_the_values_of_p(case: Case, tmp_path: Path) -> None:
     """pack(values_of(p)) = p on the exported instance and on a second one: a parameter
     file (the values) describes an instance completely."""
     cfg = load_case(case, tmp_path)
@@ -348,8 +371,9 @@ def test_c_api_returns_error_codes_and_warm_starts(built: Built, tmp_path: Path)
 
 
 @needs_cc
-@pytest.mark.parametrize("built", [ROOT / "problems" / f"{name}.yaml" for name in VALGRIND],
-                         indirect=True, ids=VALGRIND)
+@pytest.mark.parametrize("built", [Case(ROOT / "problems" / f"{name}.yaml") for name in VALGRIND]
+                         + [Case(ROOT / "problems" / "heavy_top_rotors.yaml", "order4")],
+                         indirect=True, ids=[*VALGRIND, "heavy_top_rotors-order4"])
 def test_valgrind_runs_the_driver_clean(built: Built) -> None:
     """No invalid reads or writes and no definite leaks (one file per built-in model)."""
     if shutil.which("valgrind") is None:

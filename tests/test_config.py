@@ -133,7 +133,8 @@ def test_custom_rigid_body_reproduces_the_built_in() -> None:
 
 
 def test_definition_only_for_custom(tmp_path) -> None:
-    refused(tmp_path, BASE + "definition: {cost: '1'}\n", "definition is only read for model: custom")
+    refused(tmp_path, BASE + "definition: {cost: '1'}\n",
+            "definition is only read for model: custom")
 
 
 def test_custom_without_definition(tmp_path) -> None:

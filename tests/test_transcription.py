@@ -22,8 +22,9 @@ def free_end_velocity() -> og.Problem:
 
 @pytest.mark.parametrize("factory", [rigid_body, free_end_velocity, minimum_acceleration,
                                      rolling])
-def test_every_variable_is_used_and_licq_holds(factory) -> None:
-    solver = og.compile(factory(), N=12)
+@pytest.mark.parametrize("scheme", og.nlp.SCHEME_NAMES)
+def test_every_variable_is_used_and_licq_holds(factory, scheme: str) -> None:
+    solver = og.compile(factory(), N=12, scheme=scheme)
     tr = solver.transcription
     sol = solver.solve(multistart=factory is rolling, replay=False)
     assert sol.success, sol.status

@@ -195,9 +195,9 @@ def model_sources(tr: Transcription, default_p: np.ndarray, guess: str) -> tuple
         "OCG_P_T": tr.layout.p_slices["T"].start, "OCG_N_BLOCKS": len(values.blocks),
         "OCG_N_STATE_FIELDS": len(state_fields), "OCG_N_VELOCITY_FIELDS": len(velocity_fields),
         "OCG_N_PARAMETER_FIELDS": len(param_fields), "OCG_NU": len(controls),
-        "OCG_N_MULTIPLIER_NAMES": len(multipliers),
+        "OCG_N_MULTIPLIER_NAMES": len(multipliers), "OCG_N_POST": len(C_READOUT_OUTPUTS),
         "OCG_SCHEME": _c_string(tr.disc.scheme),
-        "OCG_RETRACTION": _c_string(tr.disc.retraction), "OCG_RULE": _c_string(tr.disc.rule),
+        "OCG_RETRACTION": _c_string(tr.scheme.retraction), "OCG_RULE": _c_string(tr.disc.rule),
         "OCG_GUESS_LABEL": _c_string(guess),
     }
     header = "\n".join([

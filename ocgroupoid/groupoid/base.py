@@ -91,6 +91,25 @@ class Factor(ABC):
         return (ret.dtau_inv(h * xi_prev) @ eta / h,
                 -(ret.dtau_inv_left(h * xi_next) @ eta) / h)
 
+    def coordinate_rate(self, ret: Retraction, theta: Array, y: Array) -> Array:
+        """``dTheta/dt`` that moves the state as ``s(t) = step(s_k, tau(Theta(t)))`` with the
+        velocity y: ``dtau^{-1}_left(Theta) y`` for right (body) factors (``s^{-1} ds/dt =
+        y``), ``dtau^{-1}(Theta) y`` for left (spatial) ones (seed 003, §5.4: the
+        left-trivialised derivative ``d_l tau``)."""
+        return ret.dtau_inv_left(theta) @ y if self.side == "right" else ret.dtau_inv(theta) @ y
+
+    def magnus(self, ya: Array, yb: Array, H: Any) -> Array:
+        """Exponential coordinates of the step over an interval of length H from the velocities
+        ya, yb at its two Gauss points: the fourth-order Magnus step
+        ``H/2 (ya + yb) +- sqrt(3)/12 H^2 [ya, yb]`` (+ for right/body factors, - for
+        left/spatial ones; local error O(H^5); exact on R^n, where the bracket vanishes)."""
+        sign = 1.0 if self.side == "right" else -1.0
+        return H / 2 * (ya + yb) + sign * float(np.sqrt(3.0)) / 12 * H * H * (self.ad(ya) @ yb)
+
+    def velocity_of_rate(self, ret: Retraction, theta: Array, rate: Array) -> Array:
+        """The velocity of a coordinate rate: the inverse of :meth:`coordinate_rate`."""
+        return ret.dtau_left(theta) @ rate if self.side == "right" else ret.dtau(theta) @ rate
+
     @abstractmethod
     def chart(self, s: Array, target: Array) -> Array:
         """Local coordinates (length ``state_dim``) of ``s`` around the packed target;

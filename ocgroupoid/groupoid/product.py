@@ -96,6 +96,21 @@ class Groupoid:
                             zip(self.factors, retractions, self.state_layout.slices,
                                 self.velocity_layout.slices)])
 
+    def coordinate_rate(self, retractions: Sequence[Any], theta: Any, y: Any) -> Any:
+        """dTheta/dt of the product's step coordinates, factor by factor."""
+        return ca.vertcat(*[f.coordinate_rate(r, theta[vs], y[vs]) for f, r, vs in
+                            zip(self.factors, retractions, self.velocity_layout.slices)])
+
+    def magnus(self, ya: Any, yb: Any, H: Any) -> Any:
+        """The fourth-order Magnus step of every factor (:meth:`Factor.magnus`)."""
+        return ca.vertcat(*[f.magnus(ya[vs], yb[vs], H) for f, vs in
+                            zip(self.factors, self.velocity_layout.slices)])
+
+    def velocity_of_rate(self, retractions: Sequence[Any], theta: Any, rate: Any) -> Any:
+        """The product velocity of coordinate rates, factor by factor."""
+        return ca.vertcat(*[f.velocity_of_rate(r, theta[vs], rate[vs]) for f, r, vs in
+                            zip(self.factors, retractions, self.velocity_layout.slices)])
+
     def state_rate(self, s: Any, y: Any) -> Any:
         """ds/dt of a product state for the velocity y (the reconstruction equations)."""
         return ca.vertcat(*[f.state_rate(s[ss], y[vs]) for f, ss, vs in

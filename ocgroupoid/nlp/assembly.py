@@ -33,7 +33,9 @@ class Block:
     """One kind of stage: ``fun(z) -> (f, g)`` applied to the columns of ``w[idx]``.
 
     ``rows`` names the m constraint rows of one column and ``columns`` each column (e.g.
-    ``node 3``); ``times`` are the columns' times as fractions of T (path constraints).
+    ``node 3``). A column may impose its constraints at several times (``points``, e.g. the
+    two Gauss points of an interval): its m rows are then ``points`` groups of m/points rows,
+    one group per time. ``times`` are the times of every (column, point), as fractions of T.
     """
 
     name: str
@@ -44,6 +46,7 @@ class Block:
     rows: list[str] = field(default_factory=list)
     columns: list[str] = field(default_factory=list)
     times: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    points: int = 1
     g_offset: int = 0
 
     @property
@@ -61,8 +64,11 @@ class Block:
 
     @property
     def g_rows(self) -> np.ndarray:
-        """Global constraint rows, shaped (m, ncols): column c holds stage c's rows."""
-        return self.g_offset + np.arange(self.m * self.ncols).reshape(self.ncols, self.m).T
+        """Global constraint rows, shaped (m/points, ncols*points), one column per time: with
+        one point, column c holds stage c's rows."""
+        per = self.m // self.points
+        return self.g_offset + np.arange(self.m * self.ncols).reshape(
+            self.ncols * self.points, per).T
 
     def labels(self) -> list[str]:
         """A readable name for each of its constraint rows, column by column."""

@@ -50,8 +50,8 @@ DEFAULT_IPOPT: dict[str, Any] = {
 #: outputs of the read-out Function, in the order exported C reads them (enum ocg_output)
 READOUT_OUTPUTS = ("x_solution", "t", "states", "node_states", "velocity_t", "velocities",
                    "control_t", "controls", "multiplier_t", "multipliers",
-                   "final_multipliers", "steps")
-C_READOUT_OUTPUTS = READOUT_OUTPUTS[:11]
+                   "final_multipliers", "control_breaks", "control_coefficients", "steps")
+C_READOUT_OUTPUTS = READOUT_OUTPUTS[:13]
 
 
 def nlpsol_options(ipopt: dict[str, Any] | None, fns: dict[str, ca.Function]) -> dict[str, Any]:
@@ -305,7 +305,7 @@ class Transcription:
         outs = [x_rec, times(np.arange(self.N + 1) / self.N),
                 shown.map(self.N + 1)(r.states), r.states, times(r.velocity_t), r.velocities,
                 times(r.control_t), r.controls, times(self.path_times()), lam_path, lam_final,
-                r.steps]
+                times(r.control_breaks), r.control_coefficients, r.steps]
         return ca.Function("readout", [x, p, lam], [ca.densify(o) for o in outs],
                            ["x", "p", "lam_g"], list(READOUT_OUTPUTS))
 
@@ -333,7 +333,7 @@ class Transcription:
         outs = self.readout_function(x, p, lam)
         res = {k: np.array(v).T for k, v in zip(READOUT_OUTPUTS, outs)}
         res["x_solution"] = res["x_solution"].ravel()
-        for k in ("t", "velocity_t", "control_t", "multiplier_t"):
+        for k in ("t", "velocity_t", "control_t", "multiplier_t", "control_breaks"):
             res[k] = res[k].ravel()
         res["final_multipliers"] = res["final_multipliers"].ravel()
         return res

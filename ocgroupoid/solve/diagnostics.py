@@ -26,16 +26,19 @@ from .replay import Replay, terminal_errors
 
 def euler_lagrange_residual(tr: Transcription, x: np.ndarray, p: np.ndarray,
                             lam_g: np.ndarray) -> np.ndarray:
-    """The scheme's discrete Euler-Lagrange residuals (one row per interior node)."""
-    lam = np.zeros(tr.ng)
-    rows = tr.rows(Kind.PATH).ravel()
-    lam[rows] = lam_g[rows]
-    xs, ps, ls = ca.MX.sym("x", tr.nx), ca.MX.sym("p", tr.np), ca.MX.sym("lam", tr.ng)
+    """The scheme's discrete Euler-Lagrange residuals (one row per interior node), with the
+    multipliers of Phi_d and of the final conditions: the reconstruction's multipliers are
+    never used (the variations keep the reconstruction satisfied)."""
+    lam = np.asarray(lam_g, dtype=float).copy()
+    lam[tr.rows(Kind.RECONSTRUCTION).ravel()] = 0.0
     f, g = tr.nlp["f"], tr.nlp["g"]
-    ext = ca.substitute([f + ca.dot(ls, g)], [tr.nlp["x"], tr.nlp["p"]], [xs, ps])[0]
-    grad = np.array(ca.Function("grad", [xs, ps, ls], [ca.gradient(ext, xs)])(x, p, lam)).ravel()
-    w = np.concatenate([np.asarray(x, dtype=float).ravel(), p])
-    return tr.scheme.euler_lagrange_residual(np.concatenate([grad, np.zeros(tr.np)]), w)
+    ls = ca.MX.sym("lam", tr.ng)
+    lagrangian = ca.Function("lagrangian", [tr.nlp["x"], tr.nlp["p"], ls], [f + ca.dot(ls, g)])
+    xs, ps = ca.MX.sym("x", tr.nx), ca.MX.sym("p", tr.np)
+    reconstruct = ca.Function("reconstruct", [xs, ps], [tr.readout_function(
+        xs, ps, ca.MX.zeros(tr.ng))[0]])
+    return tr.scheme.euler_lagrange_residual(lagrangian, reconstruct,
+                                             np.asarray(x, dtype=float).ravel(), p, lam)
 
 
 def conserved_values(tr: Transcription, states: np.ndarray, velocities: np.ndarray,
@@ -70,9 +73,10 @@ def step_sizes(tr: Transcription, steps: np.ndarray) -> dict[str, float]:
 
 
 def diagnose(tr: Transcription, x: np.ndarray, p: np.ndarray, lam_g: np.ndarray,
-             out: dict[str, np.ndarray], replay: bool = True, solved: bool = True
-             ) -> dict[str, Any]:
-    """All checks (a)-(d) as a JSON-friendly dict, for the read-out ``out`` of (x, p, lam_g).
+             out: dict[str, np.ndarray], ppoly: dict[str, np.ndarray], replay: bool = True,
+             solved: bool = True) -> dict[str, Any]:
+    """All checks (a)-(d) as a JSON-friendly dict, for the read-out ``out`` of (x, p, lam_g)
+    and its control polynomial ``ppoly``.
     The replay runs for solved points only: the controls of a failed solve can be huge or
     NaN, and integrating them can take hours."""
     g = np.array(tr.g_fun(x, p)).ravel()
@@ -97,5 +101,5 @@ def diagnose(tr: Transcription, x: np.ndarray, p: np.ndarray, lam_g: np.ndarray,
         d["replay"] = {"available": False,
                        "reason": "not replayed: IPOPT did not solve, the controls are no answer"}
     elif replay:
-        d["replay"] = Replay(tr).run(out, p)
+        d["replay"] = Replay(tr).run(out, ppoly, p)
     return d

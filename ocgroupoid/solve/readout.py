@@ -45,7 +45,8 @@ def make_solution(tr: Transcription, r: RawResult, minima: Sequence[Any],
         mult["Phi"] = out["multipliers"]
     if out["final_multipliers"].size:
         mult["final"] = out["final_multipliers"]
-    diagnostics = diagnose(tr, r.x, r.p, r.lam_g, out, replay=replay, solved=r.success)
+    ppoly = control_ppoly(out)
+    diagnostics = diagnose(tr, r.x, r.p, r.lam_g, out, ppoly, replay=replay, solved=r.success)
     diagnostics["reconstruction_residual_nlp"] = recon_nlp
     diagnostics["seconds"] = time.perf_counter() - t0
     T = tr.horizon_of(r.p)
@@ -55,10 +56,20 @@ def make_solution(tr: Transcription, r: RawResult, minima: Sequence[Any],
         problem=pb.name, success=r.success, status=r.status, N=tr.N, T=T, cost=r.cost,
         iterations=r.iterations, solve_seconds=r.solve_seconds,
         build_seconds=tr.build_seconds,
-        discretization={"scheme": tr.disc.scheme, "retraction": tr.disc.retraction,
+        discretization={"scheme": tr.disc.scheme, "retraction": tr.scheme.retraction,
                         "rule": tr.disc.rule, "order": pb.order, "start": r.label},
         parameters=params, t=out["t"], states=states, velocity_t=out["velocity_t"],
         velocities=velocities, controls_t=out["control_t"], controls=out["controls"],
         control_names=[n for n, _ in pb.controls], multipliers=mult, diagnostics=diagnostics,
         minima=[m.__dict__ for m in minima], hint=hint_for(tr, r, out["steps"]), x=r.x, p=r.p,
+        control_ppoly=ppoly,
     )
+
+
+def control_ppoly(out: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """``{"x": breakpoints, "c": (k, pieces, m)}`` of the read-out's control polynomial."""
+    x, coeff = out["control_breaks"], out["control_coefficients"]  # coeff: pieces x (k m)
+    m = out["controls"].shape[1]
+    pieces = x.size - 1
+    k = coeff.size // max(pieces * m, 1) if m else 0
+    return {"x": x, "c": coeff.T.reshape(k, m, pieces).transpose(0, 2, 1)}

@@ -4,8 +4,11 @@ Second-order problems with mechanics integrate ``M(q, y) dy/dt = F(u) - c(q, y)`
 ``F_actuated = B u``; second-order problems whose controls are the accelerations integrate
 ``dy/dt = u``; first-order problems whose controls are velocities solve the constraints
 ``psi(q, y) = 0`` for the remaining velocities. States follow the reconstruction equations
-(``dR/dt = R hat(Omega)``, ...). Any other problem has no replay. The controls between
-their samples are interpolated linearly.
+(``dR/dt = R hat(Omega)``, ...). Any other problem has no replay. The controls are the
+piecewise polynomial the scheme implies (``Solution.control_ppoly``): linear between node
+samples for ``order2``, cubic (second-order problems) or linear within each interval
+(first-order problems) for ``order4``. A user replays a plan the same way with
+``scipy.interpolate.PPoly`` and ``solve_ivp``.
 """
 
 from __future__ import annotations
@@ -95,14 +98,14 @@ class Replay:
         ysol = ca.substitute(yfull, ydep, -ca.solve(J, r0))  # exact for affine psi
         self.rhs = ca.Function("rhs", [s, u, pb.P], [ca.substitute(sdot, y, ysol)])
 
-    def run(self, out: dict[str, np.ndarray], p: np.ndarray, rtol: float = 1e-12,
-            atol: float = 1e-12) -> dict[str, Any]:
-        """Integrate the read-out ``out`` sample interval by sample interval; return the
-        final state and its errors against the targets of p."""
+    def run(self, out: dict[str, np.ndarray], ppoly: dict[str, np.ndarray], p: np.ndarray,
+            rtol: float = 1e-12, atol: float = 1e-12) -> dict[str, Any]:
+        """Integrate from the read-out's initial state, piece by piece of the control
+        polynomial; return the final state and its errors against the targets of p."""
         if self.rhs is None:
             return {"available": False, "reason": self.reason}
         tr = self.tr
-        t_u, U = out["control_t"], out["controls"]
+        breaks, C = ppoly["x"], ppoly["c"]  # C: (k, pieces, m), highest power first
         P = tr.part(p, "P")
         ns = tr.problem.groupoid.state_size
         second = tr.problem.end_velocities  # the state carries the velocities too
@@ -110,18 +113,19 @@ class Replay:
             out["node_states"][0].copy()
         rhs = self.rhs
 
-        def f(t: float, z: np.ndarray, a: float, b: float, ua: np.ndarray, ub: np.ndarray
-              ) -> np.ndarray:
-            u = ua + (t - a) / (b - a) * (ub - ua)
+        def f(t: float, z: np.ndarray, a: float, coeffs: np.ndarray) -> np.ndarray:
+            u = coeffs[0].copy()
+            for c in coeffs[1:]:  # Horner in t - a
+                u = u * (t - a) + c
             if second:
                 sd, yd = rhs(z[:ns], z[ns:], u, P)
                 return np.concatenate([sd.full().ravel(), yd.full().ravel()])
             return rhs(z, u, P).full().ravel()
 
-        for k in range(len(t_u) - 1):
-            a, b = t_u[k], t_u[k + 1]
+        for j in range(len(breaks) - 1):
+            a, b = breaks[j], breaks[j + 1]
             sol = solve_ivp(f, (a, b), z, method="DOP853", rtol=rtol, atol=atol,
-                            args=(a, b, U[k], U[k + 1]))
+                            args=(a, C[:, j, :]))
             if not sol.success:
                 return {"available": False, "reason": f"solve_ivp failed: {sol.message}"}
             z = sol.y[:, -1]

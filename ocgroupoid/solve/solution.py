@@ -1,8 +1,11 @@
 """The Solution of a solve: trajectory, controls, multipliers, stats and diagnostics.
 
 ``to_json``/``from_json`` use the format of shared/PROBLEMS.md ("What a solution file
-holds"), extended with the discretisation, the parameters, the multi-start minima and the
-NLP point (so a file is enough to warm-start or to compare with exported C code).
+holds"), extended with the discretisation, the parameters, the multi-start minima, the NLP
+point (so a file is enough to warm-start or to compare with exported C code) and the control
+the scheme implies as a piecewise polynomial, ``controls.ppoly = {"x": breakpoints, "c":
+[k][pieces][m]}`` in ``scipy.interpolate.PPoly``'s convention (highest power first, local
+coordinates from each breakpoint): ``PPoly(np.array(c), x)(t)`` is the control at t.
 """
 
 from __future__ import annotations
@@ -84,12 +87,24 @@ class Solution:
     diagnostics: dict[str, Any]
     minima: list[dict[str, Any]] = field(default_factory=list)
     hint: str = ""
+    #: breakpoints ``x`` and coefficients ``c`` (k x pieces x m) of the control (PPoly)
+    control_ppoly: dict[str, np.ndarray] = field(default_factory=dict)
     x: np.ndarray = field(default_factory=lambda: np.zeros(0))
     p: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     def __repr__(self) -> str:
         return (f"Solution({self.problem!r}, status={self.status!r}, cost={self.cost:.10g}, "
                 f"N={self.N}, T={self.T:g}, iterations={self.iterations})")
+
+    def control(self, t: Any) -> np.ndarray:
+        """The control the scheme implies at the times t (rows), from its piecewise
+        polynomial (``scipy.interpolate.PPoly``)."""
+        from scipy.interpolate import PPoly
+
+        if not self.control_ppoly:
+            raise ValueError("this solution carries no control polynomial (an old file?)")
+        return PPoly(np.asarray(self.control_ppoly["c"], dtype=float),
+                     np.asarray(self.control_ppoly["x"], dtype=float))(t)
 
     def raise_for_status(self) -> "Solution":
         """Raise SolverError (with IPOPT's status and the hint) unless solved."""
@@ -109,7 +124,8 @@ class Solution:
                       "build_seconds": self.build_seconds},
             "discretization": self.discretization,
             "parameters": self.parameters,
-            "controls": {"t": self.controls_t, "u": self.controls, "names": self.control_names},
+            "controls": {"t": self.controls_t, "u": self.controls, "names": self.control_names,
+                         "ppoly": self.control_ppoly},
             "states": {"t": self.t, **self.states},
             "velocities": {"t": self.velocity_t, **self.velocities},
             "multipliers": self.multipliers,
@@ -149,6 +165,8 @@ class Solution:
             velocities={k: np.array(v, dtype=float) for k, v in vels.items()},
             controls_t=arr(ctrl["t"]), controls=np.array(ctrl["u"], dtype=float),
             control_names=list(ctrl.get("names", [])), multipliers=d.get("multipliers", {}),
+            control_ppoly={k: np.array(v, dtype=float) for k, v in
+                           ctrl.get("ppoly", {}).items()},
             diagnostics=d.get("diagnostics", {}), minima=d.get("minima", []),
             hint=d.get("hint", ""), x=np.array(d.get("nlp", {}).get("x", []), dtype=float),
             p=np.array(d.get("nlp", {}).get("p", []), dtype=float),

@@ -103,7 +103,14 @@ static const ocg_function ocg_f_post = OCG_FUNCTION(ocg_gen_post);
 static const ocg_function *const ocg_functions[] = {&ocg_f_nlpsol, &ocg_f_guess, &ocg_f_pack,
                                                     &ocg_f_post};
 #define OCG_N_FUNCTIONS (sizeof ocg_functions / sizeof ocg_functions[0])
-#define OCG_N_POST 11 /* outputs of ocg_gen_post: OCG_X .. OCG_FINAL_MULTIPLIERS */
+/* ocg_gen_post has OCG_N_POST outputs (ocg_model.h): OCG_X .. OCG_FINAL_MULTIPLIERS, then the
+ * control polynomial's breakpoints and coefficients */
+static int ocg_post_index(enum ocg_output which) {
+  if ((int)which >= 0 && (int)which <= (int)OCG_FINAL_MULTIPLIERS) return (int)which;
+  if (which == OCG_CONTROL_BREAKS) return 11;
+  if (which == OCG_CONTROL_COEFFICIENTS) return 12;
+  return -1;
+}
 
 typedef struct {
   const casadi_real **arg;
@@ -322,10 +329,11 @@ const double *ocg_output(const ocg_result *r, enum ocg_output which, size_t *row
   size_t n_rows = 0, n_cols = 0;
   const double *data = NULL;
   if (r && r->solved) {
-    if ((int)which >= 0 && (int)which < OCG_N_POST) {
-      n_rows = r->post_count[which];
-      n_cols = r->post_width[which];
-      data = r->post[which];
+    int k = ocg_post_index(which);
+    if (k >= 0 && k < OCG_N_POST) {
+      n_rows = r->post_count[k];
+      n_cols = r->post_width[k];
+      data = r->post[k];
     } else if (which == OCG_P) {
       n_rows = 1, n_cols = OCG_NP, data = r->p;
     } else if (which == OCG_LAM_G) {
@@ -376,6 +384,23 @@ static void ocg_json_matrix(FILE *out, const double *v, size_t rows, size_t cols
   for (k = 0; k < rows; ++k) {
     if (k) fputs(", ", out);
     ocg_json_vector(out, v + k * cols, cols);
+  }
+  fputc(']', out);
+}
+
+/* pieces x (k m) row-major as PPoly's c[k][pieces][m] */
+static void ocg_json_coefficients(FILE *out, const double *v, size_t pieces, size_t width,
+                                  size_t m) {
+  size_t i, j, k = m ? width / m : 0;
+  fputc('[', out);
+  for (i = 0; i < k; ++i) {
+    if (i) fputs(", ", out);
+    fputc('[', out);
+    for (j = 0; j < pieces; ++j) {
+      if (j) fputs(", ", out);
+      ocg_json_vector(out, v + j * width + i * m, m);
+    }
+    fputc(']', out);
   }
   fputc(']', out);
 }
@@ -456,7 +481,13 @@ int ocg_write_json(const ocg_result *r, FILE *out) {
   ocg_json_matrix(out, v, rows, cols);
   fputs(", \"names\": ", out);
   ocg_json_names(out, ocg_control_names, OCG_NU);
-  fputs("},\n \"states\": ", out);
+  fputs(", \"ppoly\": {\"x\": ", out);
+  v = ocg_output(r, OCG_CONTROL_BREAKS, &rows, &one);
+  ocg_json_vector(out, v, rows);
+  fputs(", \"c\": ", out);
+  v = ocg_output(r, OCG_CONTROL_COEFFICIENTS, &rows, &cols);
+  ocg_json_coefficients(out, v, rows, cols, (size_t)OCG_NU);
+  fputs("}},\n \"states\": ", out);
   ocg_json_fields(out, r, OCG_T, OCG_STATES, ocg_state_fields, OCG_N_STATE_FIELDS);
   fputs(",\n \"velocities\": ", out);
   ocg_json_fields(out, r, OCG_VELOCITY_T, OCG_VELOCITIES, ocg_velocity_fields,

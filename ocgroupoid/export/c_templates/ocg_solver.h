@@ -1,4 +1,4 @@
-/* ocg_solver.h: the C API of a problem exported by ocgroupoid (API version 1).
+/* ocg_solver.h: the C API of a problem exported by ocgroupoid (API version 2).
  *
  * One export solves every instance of its model: the instance is the parameter vector p
  * = [physical parameters | initial pack | V0 | final pack | VN | T] of the compiled NLP.
@@ -28,7 +28,7 @@
 extern "C" {
 #endif
 
-#define OCG_API_VERSION 1
+#define OCG_API_VERSION 2 /* 2: the control polynomial (OCG_CONTROL_BREAKS, ...) */
 
 /* Return codes. */
 enum ocg_code {
@@ -58,7 +58,11 @@ enum ocg_output {
   OCG_MULTIPLIERS = 9,    /* one row of lambda^k per time (0 columns without constraints) */
   OCG_FINAL_MULTIPLIERS = 10, /* 1 x m: multipliers of the final conditions */
   OCG_P = 11,             /* 1 x n_p: the parameters solved for */
-  OCG_LAM_G = 12          /* 1 x n_g: all constraint multipliers as IPOPT returned them */
+  OCG_LAM_G = 12,         /* 1 x n_g: all constraint multipliers as IPOPT returned them */
+  OCG_CONTROL_BREAKS = 13, /* pieces+1 x 1: breakpoints of the control polynomial */
+  OCG_CONTROL_COEFFICIENTS = 14 /* pieces x (k n_u): per piece, coefficient i of control j
+                                   at column i n_u + j, powers of t - breakpoint from k-1
+                                   down to 0 (scipy.interpolate.PPoly's order) */
 };
 
 typedef struct ocg_result ocg_result;

@@ -6,10 +6,12 @@ from ...errors import ConfigError
 from ...model.problem import Problem
 from .base import Readout, Scheme
 from .order2 import DEFAULT_RULE, IntervalMidpoint, Node, NodeMidpoint
+from .order4 import GaussStages, QuadraticGauss
 
 #: scheme name -> problem order (1 or 2) -> class
 SCHEMES: dict[str, dict[int, type[Scheme]]] = {
     "order2": {2: NodeMidpoint, 1: IntervalMidpoint},
+    "order4": {2: QuadraticGauss, 1: GaussStages},
 }
 SCHEME_NAMES = tuple(SCHEMES)
 DEFAULT_SCHEME = "order2"
@@ -25,5 +27,6 @@ def make_scheme(name: str, problem: Problem, N: int, retraction: str, rule: str)
     return by_order[problem.order](problem, N, retraction, rule)
 
 
-__all__ = ["Scheme", "Readout", "Node", "NodeMidpoint", "IntervalMidpoint", "SCHEMES",
+__all__ = ["Scheme", "Readout", "Node", "NodeMidpoint", "IntervalMidpoint", "QuadraticGauss",
+           "GaussStages", "SCHEMES",
            "SCHEME_NAMES", "DEFAULT_SCHEME", "DEFAULT_RULE", "make_scheme"]

@@ -13,7 +13,10 @@ A scheme (rockit calls it a method) turns the continuous problem into stages on 
   states by exact reconstruction, velocities and controls with their time stamps — as
   graphs of w, so that Python and exported C evaluate the same Function;
 * :meth:`euler_lagrange_residual`: the discrete Euler-Lagrange equations checked with the
-  solver's multipliers.
+  solver's multipliers. By default the gradient of the reduced discrete action (the states
+  eliminated by exact reconstruction, so that only the multipliers lambda^k of Phi_d and
+  those of the final conditions enter) over each node's velocity variables
+  (:attr:`velocity_groups`).
 
 A new scheme is one new class registered in :mod:`ocgroupoid.nlp.schemes`.
 """
@@ -38,7 +41,12 @@ Pick = Callable[[np.ndarray], ca.MX]  # w-indices -> the gathered graph, shaped 
 
 @dataclass
 class Readout:
-    """Graphs of w that a scheme reads off a point (times as fractions of T)."""
+    """Graphs of w that a scheme reads off a point (times as fractions of T).
+
+    The control the scheme implies is a piecewise polynomial in ``scipy.interpolate.PPoly``'s
+    convention: breakpoints ``control_breaks`` and coefficients of ``(t - t_j)^(k-1-i)``,
+    highest power first, stored as rows ``i * n_u + component`` with one column per piece.
+    """
 
     steps: ca.MX  # dim y x N: algebra increments a_k, s_{k+1} = step(s_k, tau(a_k))
     states: ca.MX  # ds x (N+1): s_0 and the states reached by the exact reconstruction
@@ -46,6 +54,15 @@ class Readout:
     velocities: ca.MX  # dim y x len(velocity_t)
     control_t: np.ndarray
     controls: ca.MX  # n_u x len(control_t)
+    control_breaks: np.ndarray  # pieces + 1 breakpoints
+    control_coefficients: ca.MX  # (k n_u) x pieces
+
+
+def piecewise_linear(u: ca.MX, t: np.ndarray, T: ca.MX) -> ca.MX:
+    """PPoly coefficients of the linear interpolant of samples u (n_u x len(t)) at the
+    times t (fractions of T): slopes, then values at the left breakpoints."""
+    dt = T * ca.DM(np.diff(t)).T
+    return ca.vertcat((u[:, 1:] - u[:, :-1]) / ca.repmat(dt, u.size1(), 1), u[:, :-1])
 
 
 class Scheme(ABC):
@@ -90,11 +107,28 @@ class Scheme(ABC):
     def readout(self, pick: Pick) -> Readout:
         """What a solution reports, as graphs of w."""
 
-    @abstractmethod
-    def euler_lagrange_residual(self, grad: np.ndarray, w: np.ndarray) -> np.ndarray:
-        """Residuals (one row per interior node, dim y columns) of the discrete
-        Euler-Lagrange equations, from the gradient over w of the action sum plus the path
-        constraints times their multipliers."""
+    @property
+    def velocity_groups(self) -> np.ndarray:
+        """w-indices of the velocity variables whose residuals are reported, one row per node
+        (or interval): the discrete Euler-Lagrange equations there."""
+        raise NotImplementedError
+
+    def euler_lagrange_residual(self, lagrangian: ca.Function, reconstruct: ca.Function,
+                                x: np.ndarray, p: np.ndarray, lam: np.ndarray) -> np.ndarray:
+        """Residuals of the discrete Euler-Lagrange equations (one row per node).
+
+        ``lagrangian(x, p, lam)`` is the action sum plus the constraints times their
+        multipliers (the reconstruction's set to zero), ``reconstruct(x, p)`` the point
+        with every state recomputed from the velocities. The residual is the gradient of
+        their composition — the reduced discrete action with multipliers — over
+        :attr:`velocity_groups`: zero exactly where the discrete trajectory extremises it
+        (seed 000, eq. 18, for the reduced variables).
+        """
+        xs = ca.MX.sym("x", x.size)
+        val = lagrangian(reconstruct(xs, p), p, lam)
+        grad = np.array(ca.Function("reduced", [xs], [ca.gradient(val, xs)])(x)).ravel()
+        g = np.concatenate([grad, np.zeros(p.size)])
+        return g[self.velocity_groups]
 
     @abstractmethod
     def unpack(self, w: np.ndarray) -> dict[str, np.ndarray]:
@@ -103,7 +137,8 @@ class Scheme(ABC):
     def step_over(self, pick: Pick) -> ca.MX:
         """The states s_1..s_N reached from s_0 by the steps (exact reconstruction)."""
         assert self.layout is not None
-        return self.stages.step.mapaccum(self.N)(pick(self.layout.s0), self.readout_steps(pick))
+        steps = self.readout_steps(pick)
+        return self.stages.step.mapaccum(self.N)(pick(self.layout.s0), steps)
 
     @abstractmethod
     def readout_steps(self, pick: Pick) -> ca.MX:

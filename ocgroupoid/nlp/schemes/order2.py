@@ -32,7 +32,7 @@ from ...lie.retraction import Retraction
 from ...model.problem import Problem
 from ..assembly import Block, Kind
 from ..layout import Layout
-from .base import Pick, Readout, Scheme
+from .base import Pick, Readout, Scheme, piecewise_linear
 
 DEFAULT_RULE = "midpoint"
 
@@ -136,12 +136,18 @@ class IntervalVelocities(Scheme):
         return {"xi": w[self.xi].T, "s": w[self.states].T, "V0": w[lay.V0], "VN": w[lay.VN],
                 "T": w[lay.T][0], "P": w[lay.P]}
 
-    def euler_lagrange_residual(self, grad: np.ndarray, w: np.ndarray) -> np.ndarray:
+    def euler_lagrange_residual(self, lagrangian: ca.Function, reconstruct: ca.Function,
+                                x: np.ndarray, p: np.ndarray, lam: np.ndarray) -> np.ndarray:
         """Eq. 13/18 at the interior nodes j = 1..N-1: the derivative of the action sum plus
         multiplier terms along the admissible variation ``w_{j-1} -> w_{j-1} exp(t eta)``,
         ``w_j -> exp(-t eta) w_j`` (seed 000, eq. 11), which moves s_j and leaves every
-        other state (and so the reconstruction) unchanged. The variation comes from the
-        retractions' ``dtau_inv`` formulas (:meth:`Factor.dxi`)."""
+        other state (and so the reconstruction) unchanged. The gradient comes from CasADi's
+        AD of ``lagrangian``, the variation from the retractions' ``dtau_inv`` formulas
+        (:meth:`Factor.dxi`)."""
+        xs = ca.MX.sym("x", x.size)
+        grad = np.concatenate([np.array(ca.Function("grad", [xs], [ca.gradient(
+            lagrangian(xs, p, lam), xs)])(x)).ravel(), np.zeros(p.size)])
+        w = np.concatenate([x, p])
         G, N = self.problem.groupoid, self.N
         dg, ds = G.algebra_dim, G.state_size
         xp, xn, s, T = ca.SX.sym("xp", dg), ca.SX.sym("xn", dg), ca.SX.sym("s", ds), \
@@ -238,9 +244,10 @@ class NodeMidpoint(IntervalVelocities):
         prev = ca.horzcat(2 * V0 - XI[:, 0], XI)
         nxt = ca.horzcat(XI, 2 * VN - XI[:, -1])
         t = np.arange(N + 1) / N
+        u = self.node.map(N + 1)(S, prev, nxt, T, P)[2]
         return Readout(self.readout_steps(pick), S, t,
-                       ca.horzcat(V0, (XI[:, :-1] + XI[:, 1:]) / 2, VN), t,
-                       self.node.map(N + 1)(S, prev, nxt, T, P)[2])
+                       ca.horzcat(V0, (XI[:, :-1] + XI[:, 1:]) / 2, VN), t, u, t,
+                       piecewise_linear(u, t, T))
 
 
 class IntervalMidpoint(IntervalVelocities):
@@ -300,4 +307,5 @@ class IntervalMidpoint(IntervalVelocities):
             u = ca.horzcat(u[:, 0] - (u[:, 1] - u[:, 0]) / 2, u,
                            u[:, -1] + (u[:, -1] - u[:, -2]) / 2)
             t_u = np.concatenate([[0.0], t_mid, [1.0]])
-        return Readout(self.readout_steps(pick), S, t_mid, XI, t_u, u)
+        return Readout(self.readout_steps(pick), S, t_mid, XI, t_u, u, t_u,
+                       piecewise_linear(u, t_u, T))

@@ -1,0 +1,367 @@
+"""Fourth-order schemes (``order4``).
+
+Second-order problems (:class:`QuadraticGauss`). The velocity on interval k is the
+quadratic through the node values ``y_k, y_{k+1}`` with a bubble ``b_k`` (value at the
+midpoint minus the mean of the ends): ``y = (1 - tau) y_k + tau y_{k+1} + 4 tau (1 - tau)
+b_k``, continuous across nodes, its rate jumping there. The cost ``int Ltilde(q, y, dy) dt``
+is the 3-point Gauss-Legendre rule; the constraints ``Phi = 0`` hold at the two Gauss points
+(each row scaled by its quadrature weight ``h/2``, so that its multiplier approximates the
+seeds' ``lambda(t)`` there). The group increment solves the reconstruction equation
+(``ds/dt = s y`` on the body side) by the fourth-order Magnus step
+``W_k = h/2 (y(g_1) + y(g_2)) + sqrt(3)/12 h^2 [y(g_1), y(g_2)]``, ``s_{k+1} = step(s_k,
+exp(W_k))`` (:meth:`Factor.magnus`: explicit, no nested derivatives of a retraction, local
+error O(h^5), exact on R^n); the same step over ``[t_k, t_k + c h]`` gives the states where
+the Lagrangian needs q. Since ``tau(tau^-1(exp W)) = exp W``, the increments are those of any
+retraction: the scheme steps with exp (measured: an RK4 step of ``dTheta/dt =
+dtau^-1(Theta) y`` in the retraction's coordinates gave the same order with stage Hessians
+several times larger, from its nested ``dtau^-1``).
+
+Why this space: a quadratic per interval leaves two unknowns per component and interval
+(``y_{k+1}``, ``b_k``), which the two Gauss points determine for the unactuated components:
+on ``dy/dt = lambda y`` the step is Gauss-Legendre's ``(1 + z/2 + z^2/12)/(1 - z/2 +
+z^2/12)``, ``z = lambda h`` (order 4, A-stable, one root). A C1 cubic Hermite velocity has the
+same count per interval but one more unknown (the initial rate) and a second root
+``~ exp(-z/3)`` of the one-step map: a free, undamped mode at the grid scale, which the
+optimiser used to satisfy the heavy top's equations only at the Gauss points (cost near 0,
+replay 0.4 rad off; measured, see tests/test_order4.py).
+
+First-order problems (:class:`GaussStages`): the seed's Runge-Kutta discrete Lagrangian
+(003, §5.4) with the two-stage Gauss method (order 4). The NLP variables of interval k are
+the coordinate rates ``eta_i`` at the stages ``c_i``; the stage coordinates are
+``xi_i = h sum_j a_ij eta_j``, the stage velocities ``y_i = d_l tau_{xi_i}(eta_i)``,
+``Theta_k = h sum_j b_j eta_j``, and
+
+    L_d = h sum_i b_i l(q_i, y_i),   Phi_d,i = h b_i psi(q_i, y_i),   q_i = base(step(s_k, xi_i)),
+
+all explicit: the constraints hold at the stages.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from ...errors import ConfigError
+from ...model.problem import Problem
+from ..assembly import Block, Kind
+from ..layout import Layout
+from .base import Pick, Readout, Scheme
+from .order2 import DEFAULT_RULE, columns, stage_function
+
+SQRT3, SQRT15 = float(np.sqrt(3.0)), float(np.sqrt(15.0))
+GAUSS2 = np.array([0.5 - SQRT3 / 6, 0.5 + SQRT3 / 6])  # nodes of the 2-point rule on [0, 1]
+GAUSS2_A = np.array([[0.25, 0.25 - SQRT3 / 6], [0.25 + SQRT3 / 6, 0.25]])  # its RK matrix
+GAUSS3 = np.array([0.5 - SQRT15 / 10, 0.5, 0.5 + SQRT15 / 10])
+GAUSS3_W = np.array([5.0, 8.0, 5.0]) / 18.0
+SAMPLES = np.array([0.0, 1.0, 2.0, 3.0]) / 3.0  # where a cubic control is sampled per interval
+
+
+def quadratic(y0: Any, y1: Any, b: Any, h: Any, tau: float) -> tuple[Any, Any]:
+    """The velocity at ``t_k + tau h`` and its rate, for node values y0, y1 and bubble b."""
+    y = (1 - tau) * y0 + tau * y1 + 4 * tau * (1 - tau) * b
+    dy = (y1 - y0 + 4 * (1 - 2 * tau) * b) / h
+    return y, dy
+
+
+def cubic_coefficients(samples: Any, h: Any) -> Any:
+    """PPoly coefficients (highest power first, in t - t_k) of the cubics through samples
+    at :data:`SAMPLES` of each interval: rows ``power * m + component``, one column per
+    interval, for samples given as 4 blocks of m rows."""
+    V_inv = np.linalg.inv(np.vander(SAMPLES, 4, increasing=True))  # alpha_j of tau^j
+    m = samples.size1() // 4
+    blocks = [samples[i * m:(i + 1) * m, :] for i in range(4)]
+    alpha = [sum(float(V_inv[j, i]) * blocks[i] for i in range(4)) for j in range(4)]
+    return ca.vertcat(*[alpha[j] / h**j for j in (3, 2, 1, 0)])
+
+
+def linear_coefficients(u0: Any, u1: Any, t0: float, t1: float, h: Any) -> Any:
+    """PPoly coefficients of the lines through u0 at t_k + t0 h and u1 at t_k + t1 h, in
+    t - t_k (rows: slope block, then value block)."""
+    slope = (u1 - u0) / ((t1 - t0) * h)
+    return ca.vertcat(slope, u0 - slope * t0 * h)
+
+
+def _check_rule(problem: Problem, rule: str) -> None:
+    if rule != DEFAULT_RULE:
+        raise ConfigError(
+            f"rule {rule!r} discretises the constraints of the order2 scheme; order4 imposes "
+            f"them at the Gauss points: leave discretization.rule at {DEFAULT_RULE!r} (the "
+            "scheme's own) or choose scheme order2")
+
+
+class QuadraticGauss(Scheme):
+    """Second-order problems: continuous piecewise-quadratic velocities, Gauss quadrature and
+    collocation, an RK4 step of the coordinate equation (module docstring)."""
+
+    name = "order4"
+    accuracy = 4
+    problem_order = 2
+    summary = ("piecewise-quadratic velocity, 3-point Gauss cost, Phi at the 2 Gauss points "
+               "(Gauss-Legendre collocation), 4th-order Magnus step with exp")
+
+    Y: np.ndarray  # dim y x (N+1) node velocities (y_0 = V_0, y_N = V_N)
+    B: np.ndarray  # dim y x N bubbles
+
+    def __init__(self, problem: Problem, N: int, retraction_name: str, rule: str) -> None:
+        # the increments are exponential coordinates: tau(tau^-1(exp W)) = exp W for every
+        # retraction, so the scheme steps with exp whatever the retraction asked for
+        super().__init__(problem, N, "exp", rule)
+        _check_rule(problem, rule)
+        G, pb = problem.groupoid, problem
+        ds, dg = G.state_size, G.algebra_dim
+        s = ca.SX.sym("s", ds)
+        y0, y1, b = (ca.SX.sym(n, dg) for n in ("y0", "y1", "b"))
+        T = ca.SX.sym("T")
+        h = T / N
+
+        def theta(c: float) -> ca.SX:
+            """Exponential coordinates of the step to t_k + c h (Magnus, local O(h^5))."""
+            if c == 0.0:
+                return ca.SX.zeros(dg)
+            ya, yb = (quadratic(y0, y1, b, h, c * float(g))[0] for g in GAUSS2)
+            return G.magnus(ya, yb, c * h)
+
+        step = theta(1.0)
+
+        def at(expr: ca.SX, tau: float) -> ca.SX:
+            y, dy = quadratic(y0, y1, b, h, tau)
+            q = G.base(G.step(s, self.retractions, theta(tau)))
+            return ca.substitute([expr], [pb.q, pb.y, pb.dy], [q, y, dy])[0]
+
+        args = [s, y0, y1, b, T, pb.P]
+        names = ["s", "y0", "y1", "b", "T", "P"]
+        L = h * sum(float(w) * at(pb.cost, float(c)) for c, w in zip(GAUSS3, GAUSS3_W))
+        phi = self.stages.constraints
+        Phi = ca.vertcat(*[h / 2 * at(phi, float(c)) for c in GAUSS2]) if phi.numel() \
+            else ca.SX(0, 1)
+        #: ``interval(s_k, y_k, y_{k+1}, b_k, T, P) -> (L_d, Phi_d)``: Phi_d stacks the two
+        #: Gauss points
+        self.interval = ca.Function("interval", args, [L, Phi], names, ["L", "Phi"])
+        #: ``increment(y_k, y_{k+1}, b_k, T) -> W_k``, exponential coordinates of the step
+        self.increment = ca.Function("increment", [y0, y1, b, T], [step],
+                                     ["y0", "y1", "b", "T"], ["Theta"])
+        u = self.stages.controls
+        #: controls at :data:`SAMPLES` of an interval (one-sided at its ends), stacked
+        self.control_samples = ca.Function(
+            "control_samples", args, [ca.vertcat(*[at(u, float(c)) for c in SAMPLES])],
+            names, ["u"])
+
+    @property
+    def n_stage(self) -> int:
+        G = self.problem.groupoid
+        return (2 * self.N - 1) * G.algebra_dim + self.N * G.state_size
+
+    def index(self, layout: Layout) -> None:
+        """x per interval k: ``b_k``, ``y_{k+1}`` (not the last: y_N is V_N), ``s_{k+1}``."""
+        G, N = self.problem.groupoid, self.N
+        dg, ds = G.algebra_dim, G.state_size
+        self.layout = layout
+        self.Y = np.zeros((dg, N + 1), dtype=np.int64)
+        self.B = np.zeros((dg, N), dtype=np.int64)
+        self.states = np.zeros((ds, N + 1), dtype=np.int64)
+        self.Y[:, 0], self.Y[:, N], self.states[:, 0] = layout.V0, layout.VN, layout.s0
+        c = 0
+        for k in range(N):
+            self.B[:, k] = layout.stage[c:c + dg]
+            c += dg
+            if k < N - 1:
+                self.Y[:, k + 1] = layout.stage[c:c + dg]
+                c += dg
+            self.states[:, k + 1] = layout.stage[c:c + ds]
+            c += ds
+        self.end_velocity = layout.VN
+
+    def blocks(self) -> list[Block]:
+        G, N, lay = self.problem.groupoid, self.N, self.layout
+        assert lay is not None
+        ds, dg, npar = G.state_size, G.algebra_dim, self.problem.P.numel()
+        step, inc = self.stages.step, self.increment
+        recon = stage_function("recon", [ds, dg, dg, dg, ds, 1], lambda s, y0, y1, b, s1, T: (
+            ca.SX(1, 1), s1 - step(s, inc(y0, y1, b, T))))
+        comps = [f"{f.state}[{j}]" for f in G.factors for j in range(f.state_size)]
+        names = [n for n, c in self.problem.constraints for _ in range(c.numel())]
+        interval = stage_function("interval", [ds, dg, dg, dg, 1, npar],
+                                  lambda *z: tuple(self.interval(*z)))
+        cols = [self.states[:, :N], self.Y[:, :N], self.Y[:, 1:], self.B]
+        return [
+            Block("recon", recon, columns(*cols, self.states[:, 1:], lay.T, ncols=N), 1,
+                  Kind.RECONSTRUCTION, rows=[f"reconstruction {c}" for c in comps],
+                  columns=[f"interval {k}" for k in range(N)]),
+            Block("interval", interval, columns(*cols, lay.T, lay.P, ncols=N), 1 + npar,
+                  Kind.PATH, [f"{n} (Gauss point {j + 1})" for j in range(2) for n in names],
+                  [f"interval {k}" for k in range(N)],
+                  ((np.arange(N)[:, None] + GAUSS2[None, :]) / N).ravel(), points=2),
+        ]
+
+    def _increments(self, Y: ca.MX, B: ca.MX, T: ca.MX) -> ca.MX:
+        return self.increment.map(self.N)(Y[:, :-1], Y[:, 1:], B, T)
+
+    def readout_steps(self, pick: Pick) -> ca.MX:
+        assert self.layout is not None
+        return self._increments(pick(self.Y), pick(self.B), pick(self.layout.T))
+
+    def point(self, XI: ca.MX, pick: Pick) -> list[tuple[np.ndarray, ca.MX]]:
+        """Node velocities: the mean of the adjacent interval velocities (prescribed ends
+        kept); bubbles: the quadratic's mean on each interval equals its interval velocity;
+        states by the scheme's own reconstruction."""
+        lay, N = self.layout, self.N
+        assert lay is not None
+        Y = ca.horzcat(XI[:, 0], (XI[:, :-1] + XI[:, 1:]) / 2, XI[:, N - 1])
+        ends = [ca.vertcat(*[guess[i] if idx[i] < lay.nx else given[i]
+                             for i in range(idx.size)])
+                for idx, guess, given in ((lay.V0, Y[:, 0], pick(lay.V0)),
+                                          (lay.VN, Y[:, N], pick(lay.VN)))]
+        Y = ca.horzcat(ends[0], Y[:, 1:N], ends[1])
+        B = 1.5 * (XI - (Y[:, :-1] + Y[:, 1:]) / 2)  # mean = (y_k + y_{k+1})/2 + 2 b_k/3
+        S = self.stages.step.mapaccum(N)(pick(lay.s0), self._increments(Y, B, pick(lay.T)))
+        return [(self.Y, Y), (self.B, B), (self.states[:, 1:], S)]
+
+    def readout(self, pick: Pick) -> Readout:
+        """Node velocities; controls sampled at :data:`SAMPLES` of each interval and the
+        cubics through them (one per interval: the controls jump with the rates at nodes)."""
+        lay, N = self.layout, self.N
+        assert lay is not None
+        T, P = pick(lay.T), pick(lay.P)
+        Y, B = pick(self.Y), pick(self.B)
+        steps = self._increments(Y, B, T)
+        S = ca.horzcat(pick(lay.s0), self.stages.step.mapaccum(N)(pick(lay.s0), steps))
+        samples = self.control_samples.map(N)(S[:, :-1], Y[:, :-1], Y[:, 1:], B, T, P)
+        m = self.stages.controls.numel()
+        t_u = np.concatenate([(np.arange(N)[:, None] + SAMPLES[None, :3]).ravel() / N, [1.0]])
+        u = ca.horzcat(ca.reshape(samples[:3 * m, :], m, 3 * N), samples[3 * m:, -1]) if m \
+            else ca.MX(0, 3 * N + 1)
+        coeff = cubic_coefficients(samples, T / N) if m else ca.MX(0, N)
+        return Readout(steps, S, np.arange(N + 1) / N, Y, t_u, u, np.arange(N + 1) / N, coeff)
+
+    @property
+    def velocity_groups(self) -> np.ndarray:
+        """Interval k: its bubble b_k and the velocity y_{k+1} at its end (the last interval:
+        its bubble twice, y_N being V_N)."""
+        Yend = np.hstack([self.Y[:, 1:-1], self.B[:, -1:]])
+        return np.vstack([self.B, Yend]).T
+
+    def unpack(self, w: np.ndarray) -> dict[str, np.ndarray]:
+        lay = self.layout
+        assert lay is not None
+        return {"y": w[self.Y].T, "b": w[self.B].T, "s": w[self.states].T, "T": w[lay.T][0],
+                "P": w[lay.P]}
+
+
+class GaussStages(Scheme):
+    """First-order problems: the seed's Runge-Kutta discrete Lagrangian with the two-stage
+    Gauss method, constraints at the stages (module docstring)."""
+
+    name = "order4"
+    accuracy = 4
+    problem_order = 1
+    summary = ("seed 003 §5.4: Runge-Kutta discrete Lagrangian, 2-stage Gauss, constraints "
+               "at the stages")
+
+    eta: np.ndarray  # (2 dim y) x N: the stage coordinate rates of each interval
+
+    def __init__(self, problem: Problem, N: int, retraction_name: str, rule: str) -> None:
+        super().__init__(problem, N, retraction_name, rule)
+        _check_rule(problem, rule)
+        G, pb = problem.groupoid, problem
+        ds, dg = G.state_size, G.algebra_dim
+        s, e1, e2, T = ca.SX.sym("s", ds), ca.SX.sym("eta1", dg), ca.SX.sym("eta2", dg), \
+            ca.SX.sym("T")
+        h = T / N
+        eta = (e1, e2)
+        xi = [h * (float(GAUSS2_A[i, 0]) * e1 + float(GAUSS2_A[i, 1]) * e2) for i in range(2)]
+        y = [G.velocity_of_rate(self.retractions, xi[i], eta[i]) for i in range(2)]
+        q = [G.base(G.step(s, self.retractions, xi[i])) for i in range(2)]
+        sub = [ca.substitute([pb.cost, self.stages.constraints, self.stages.controls],
+                             [pb.q, pb.y], [q[i], y[i]]) for i in range(2)]
+        args, names = [s, e1, e2, T, pb.P], ["s", "eta1", "eta2", "T", "P"]
+        #: ``interval(s_k, eta_1, eta_2, T, P) -> (L_d, Phi_d)``, Phi_d at both stages
+        self.interval = ca.Function("interval", args, [
+            h / 2 * (sub[0][0] + sub[1][0]), ca.vertcat(h / 2 * sub[0][1], h / 2 * sub[1][1])],
+            names, ["L", "Phi"])
+        #: ``stages(...) -> (y_1, y_2, u_1, u_2)``: velocities and controls at the stages
+        self.stage_values = ca.Function("stage_values", args,
+                                        [y[0], y[1], sub[0][2], sub[1][2]], names,
+                                        ["y1", "y2", "u1", "u2"])
+
+    @property
+    def n_stage(self) -> int:
+        G = self.problem.groupoid
+        return self.N * (2 * G.algebra_dim + G.state_size)
+
+    def index(self, layout: Layout) -> None:
+        """x per interval k: ``eta_1, eta_2, s_{k+1}``."""
+        G = self.problem.groupoid
+        dg = G.algebra_dim
+        self.layout = layout
+        stage = layout.stage.reshape(self.N, 2 * dg + G.state_size).T
+        self.eta = stage[:2 * dg]
+        self.states = np.hstack([layout.s0[:, None], stage[2 * dg:]])
+        self.end_velocity = layout.VN
+
+    def blocks(self) -> list[Block]:
+        G, N, lay = self.problem.groupoid, self.N, self.layout
+        assert lay is not None
+        ds, dg, npar = G.state_size, G.algebra_dim, self.problem.P.numel()
+        step = self.stages.step
+        recon = stage_function("recon", [ds, 2 * dg, ds, 1], lambda s, e, s1, T: (
+            ca.SX(1, 1), s1 - step(s, T / N * (e[:dg] + e[dg:]) / 2)))
+        comps = [f"{f.state}[{j}]" for f in G.factors for j in range(f.state_size)]
+        names = [n for n, c in self.problem.constraints for _ in range(c.numel())]
+        interval = stage_function("interval", [ds, dg, dg, 1, npar],
+                                  lambda *z: tuple(self.interval(*z)))
+        return [
+            Block("recon", recon, columns(self.states[:, :N], self.eta, self.states[:, 1:],
+                                          lay.T, ncols=N), 1, Kind.RECONSTRUCTION,
+                  rows=[f"reconstruction {c}" for c in comps],
+                  columns=[f"interval {k}" for k in range(N)]),
+            Block("interval", interval, columns(self.states[:, :N], self.eta, lay.T, lay.P,
+                                                ncols=N), 1 + npar, Kind.PATH,
+                  [f"{n} (stage {j + 1})" for j in range(2) for n in names],
+                  [f"interval {k}" for k in range(N)],
+                  ((np.arange(N)[:, None] + GAUSS2[None, :]) / N).ravel(), points=2),
+        ]
+
+    def readout_steps(self, pick: Pick) -> ca.MX:
+        """``Theta_k = h (eta_1 + eta_2)/2``."""
+        assert self.layout is not None
+        dg = self.problem.groupoid.algebra_dim
+        E = pick(self.eta)
+        return pick(self.layout.T) / self.N * (E[:dg, :] + E[dg:, :]) / 2
+
+    def point(self, XI: ca.MX, pick: Pick) -> list[tuple[np.ndarray, ca.MX]]:
+        """Both stage rates equal to the interval velocity: Theta_k = h xi_k, so the path of
+        a guess is the path of the order2 scheme's (a geodesic lands on its target)."""
+        lay = self.layout
+        assert lay is not None
+        S = self.stages.step.mapaccum(self.N)(pick(lay.s0), pick(lay.T) / self.N * XI)
+        return [(self.eta, ca.vertcat(XI, XI)), (self.states[:, 1:], S)]
+
+    def readout(self, pick: Pick) -> Readout:
+        """Velocities and controls at the stages; the controls between them linear on each
+        interval (the collocation polynomial's rate for R^n factors)."""
+        lay, N = self.layout, self.N
+        assert lay is not None
+        dg = self.problem.groupoid.algebra_dim
+        T, P, E = pick(lay.T), pick(lay.P), pick(self.eta)
+        S = ca.horzcat(pick(lay.s0), self.step_over(pick))
+        y1, y2, u1, u2 = self.stage_values.map(N)(S[:, :-1], E[:dg, :], E[dg:, :], T, P)
+        t = ((np.arange(N)[:, None] + GAUSS2[None, :]) / N).ravel()
+        interleave = lambda a, b: ca.reshape(ca.vertcat(a, b), a.size1(), 2 * N)  # noqa: E731
+        m = self.stages.controls.numel()
+        coeff = linear_coefficients(u1, u2, GAUSS2[0], GAUSS2[1], T / N) if m \
+            else ca.MX(0, N)
+        return Readout(self.readout_steps(pick), S, t, interleave(y1, y2), t,
+                       interleave(u1, u2) if m else ca.MX(0, 2 * N), np.arange(N + 1) / N,
+                       coeff)
+
+    @property
+    def velocity_groups(self) -> np.ndarray:
+        """Every interval: its two stage rates."""
+        return self.eta.T
+
+    def unpack(self, w: np.ndarray) -> dict[str, np.ndarray]:
+        lay = self.layout
+        assert lay is not None
+        return {"eta": w[self.eta].T, "s": w[self.states].T, "T": w[lay.T][0], "P": w[lay.P]}
