@@ -27,10 +27,11 @@ from .lie import so3
 from .model import GuessContext, Problem
 from .nlp import Discretization, Guess, Transcription
 from .solve import Solution, Solver, compile, solve
+from .sweep import sweep  # Dask, pandas and pyarrow are imported when a sweep runs
 
 __all__ = [
     "lie", "so3", "Problem", "GuessContext", "Groupoid", "LieGroupFactor", "Pair",
     "SphereAction", "Discretization", "Transcription", "Guess", "Solver", "compile", "solve",
     "Solution", "OcgError", "ConfigError", "DimensionError", "SingularityError",
-    "BoundaryError", "TranscriptionError", "SolverError", "export_c", "__version__",
+    "BoundaryError", "TranscriptionError", "SolverError", "export_c", "sweep", "__version__",
 ]

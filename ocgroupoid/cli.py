@@ -153,15 +153,24 @@ def check(
 
 @app.command()
 def plot(
-    solution: Path = typer.Argument(..., help="solution JSON written by `solve --out`"),
+    solution: Path = typer.Argument(..., help="solution JSON written by `solve --out`, or "
+                                    "a sweep's folder (`sweep --out`)"),
     out_path: Path = typer.Option(..., "--out", help="PNG file to write"),
 ) -> None:
-    """Plot states, velocities, controls and multipliers; attitudes as body axes on the sphere."""
+    """Plot states, velocities, controls and multipliers; attitudes as body axes on the sphere.
+    Given a sweep's folder (`sweep --out DIR`), plot cost and status against the swept keys."""
     import json
 
     from .plotting import plot_solution
     from .solve.solution import Solution
 
+    if solution.is_dir():
+        from .sweep import plot_sweep
+        try:
+            out.print(f"figure written to {plot_sweep(solution, out_path)}")
+        except OcgError as e:
+            fail(str(e))
+        return
     try:
         sol = Solution.from_json(solution)
     except FileNotFoundError:
@@ -248,6 +257,53 @@ def export_c_command(
     if f.solver.multistart or f.solver.continuation:
         err.print("note: the C solver starts from the geodesic guess; multistart and "
                   "continuation of the problem file stay in Python", highlight=False)
+
+
+@app.command()
+def sweep(
+    file: Path = typer.Argument(..., help="problem file (YAML)"),
+    grid: list[str] = typer.Option([], "--grid", help="KEY=START:STOP:COUNT (linspace) or "
+                                   "KEY=[v1, v2, ...] (YAML); several: the cartesian product"),
+    random: list[str] = typer.Option([], "--random", help="KEY=normal(mu, sigma) or "
+                                     "KEY=uniform(a, b), drawn --samples times"),
+    samples: Optional[int] = typer.Option(None, "--samples", help="number of random draws"),
+    seed: int = typer.Option(0, "--seed", help="seed of the random draws"),
+    set_: list[str] = typer.Option([], "--set", help=SET_HELP),
+    out_dir: Path = typer.Option(..., "--out", help="folder for the table (table.parquet), "
+                                 "the points' records and their solutions"),
+    scheduler: Optional[str] = typer.Option(None, "--scheduler", help="tcp://HOST:PORT of a "
+                                            "running Dask scheduler (default: a local cluster)"),
+    workers: Optional[int] = typer.Option(None, "--workers", help="local worker processes "
+                                          "(default: one per core)"),
+    resume: bool = typer.Option(False, "--resume", help="finish the sweep in --out without "
+                                "redoing finished points"),
+    warm: str = typer.Option("fallback", "--warm", help="neighbour warm starts: fallback (when "
+                             "the cold start fails), first, or off"),
+    timeout: float = typer.Option(10.0, "--timeout", help="seconds --scheduler has to answer"),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="print only errors"),
+) -> None:
+    """Solve a problem file at every point of a grid or random samples of --set overrides, on
+    Dask; one row per point in OUT/table.parquet. Exit 1 if any point failed."""
+    from .sweep import sweep as run_sweep
+    from .sweep.progress import progress_bar, summary
+
+    try:
+        with progress_bar(err, quiet) as bar:
+            df = run_sweep(file, grid, random=random, samples=samples, seed=seed,
+                           overrides=set_, out=out_dir, scheduler=scheduler, workers=workers,
+                           resume=resume, warm=warm, timeout=timeout,  # type: ignore[arg-type]
+                           progress=bar)
+    except OcgError as e:
+        fail(str(e))
+        return
+    except KeyboardInterrupt:
+        fail(f"interrupted; the finished points are kept: finish with --resume --out {out_dir}",
+             130)
+        return
+    if not quiet:
+        out.print(summary(df) + f"\ntable written to {out_dir / 'table.parquet'}")
+    if not df["success"].all():
+        raise typer.Exit(1)
 
 
 def main() -> None:
