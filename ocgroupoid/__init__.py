@@ -24,6 +24,7 @@ from .errors import (
 from .export import export_c
 from .groupoid import Groupoid, LieGroupFactor, Pair, SphereAction
 from .lie import so3
+from .lie import SE2, SE3, SO3, se2, se3
 from .model import GuessContext, Problem
 from .nlp import Discretization, Guess, Transcription
 from .solve import Solution, Solver, compile, solve
@@ -34,4 +35,5 @@ __all__ = [
     "SphereAction", "Discretization", "Transcription", "Guess", "Solver", "compile", "solve",
     "Solution", "OcgError", "ConfigError", "DimensionError", "SingularityError",
     "BoundaryError", "TranscriptionError", "SolverError", "export_c", "sweep", "__version__",
+    "SO3", "SE3", "SE2", "se3", "se2",
 ]

@@ -44,6 +44,10 @@ def summary(sol: Any) -> Table:
     t.add_row("status", f"[{'green' if sol.success else 'red'}]{sol.status}[/]")
     t.add_row("cost", f"{sol.cost:.12g}")
     t.add_row("iterations", str(sol.iterations))
+    if "T_range" in disc:
+        lo, hi = disc["T_range"]
+        t.add_row("final time (free)", f"{sol.T:.10g} in [{lo:g}, {hi:g}]"
+                  + (f", {disc['steps']} steps" if disc.get("steps") == "adaptive" else ""))
     t.add_row("build time", f"{sol.build_seconds * 1e3:.1f} ms")
     t.add_row("solve time", f"{sol.solve_seconds * 1e3:.1f} ms")
     t.add_row("EL residual (max over nodes)", f"{d['euler_lagrange_residual_max']:.2e}")
@@ -52,6 +56,11 @@ def summary(sol: Any) -> Table:
     if d["final_residual"]:
         t.add_row("final residual", ", ".join(f"{k} {v:.1e}" for k, v in
                                               d["final_residual"].items()))
+    if "bound_violation_max" in d:
+        active = d["bounds_active"]
+        t.add_row("bounds", f"max violation {d['bound_violation_max']:.1e}; active: " + (
+            ", ".join(f"{k} ({', '.join(f'{s} at {n}' for s, n in v.items())} of "
+                      f"{d['bound_points']} points)" for k, v in active.items()) or "none"))
     if d.get("conserved_drift"):
         t.add_row("conserved drift (max - min)", ", ".join(
             f"{k} {v:.2e}" for k, v in d["conserved_drift"].items()))
@@ -89,7 +98,7 @@ def solve(
         t0 = time.perf_counter()
         with _status("building the NLP...", quiet):
             solver = compile_problem(problem, f.horizon.N, d.retraction, d.rule, f.solver.ipopt,
-                                     d.scheme)
+                                     d.scheme, d.steps)
         with _status("solving...", quiet) as status:
             sol = solver.solve(multistart=f.solver.multistart,
                                continuation=f.solver.continuation or None,
@@ -130,18 +139,19 @@ def check(
         f = cfg.file
         d = f.discretization
         report = run_check(files.build(cfg), f.horizon.N, d.retraction, d.rule, f.solver.ipopt,
-                           d.scheme)
+                           d.scheme, d.steps)
     except OcgError as e:
         fail(str(e))
         return
-    t = Table(title=f"{cfg.name}: model {f.model}, N={f.horizon.N}, T={f.horizon.T:g}, "
+    t = Table(title=f"{cfg.name}: model {f.model}, N={f.horizon.N}, T={f.horizon.T}, "
                     f"{d.scheme}, {d.retraction}", show_header=False)
     t.add_column(style="bold")
     t.add_column()
     t.add_row("variables", str(report.variables))
     t.add_row("constraints", f"{report.total_constraints} (" + ", ".join(
         f"{k} {v}" for k, v in report.constraints.items() if v) + ")")
-    t.add_row("degrees of freedom", str(report.degrees_of_freedom))
+    t.add_row("degrees of freedom", f"{report.degrees_of_freedom} (variables - equality rows)"
+              + (f"; {report.inequalities} inequality rows" if report.inequalities else ""))
     t.add_row("prescribed", ", ".join(report.prescribed) or "-")
     t.add_row("free (natural boundary conditions)", ", ".join(report.free) or "-")
     t.add_row("redundant", ", ".join(report.redundant) or "none")
@@ -241,7 +251,7 @@ def export_c_command(
         d = f.discretization
         with _status("exporting C code...", False):
             done = export_c(files.build(cfg), out_dir, f.horizon.N, d.retraction, d.rule,
-                            f.solver.ipopt, scheme=d.scheme)
+                            f.solver.ipopt, scheme=d.scheme, steps=d.steps)
         if build:
             with _status("building with make...", False):
                 binary = make(done.folder, cflags)

@@ -9,6 +9,8 @@ import numpy as np
 
 from .solve.solution import write_atomic
 
+Panel = tuple[str, np.ndarray, np.ndarray, list[str]]
+
 
 def control_curve(sol: Any, per_piece: int = 12) -> tuple[np.ndarray, np.ndarray]:
     """The control polynomial sampled densely, piece by piece, with a NaN row between pieces
@@ -23,6 +25,32 @@ def control_curve(sol: Any, per_piece: int = 12) -> tuple[np.ndarray, np.ndarray
     return np.concatenate(ts), np.vstack(us)
 
 
+def manifold(sol: Any, name: str) -> str:
+    """The manifold of a state: as the Solution names it, else from its shape (a solution
+    written before manifolds were recorded: 3 x 3 matrices are rotations, 4 x 4 poses)."""
+    shape = np.shape(sol.states[name])[1:]
+    return sol.manifolds.get(name) or {(3, 3): "SO(3)", (4, 4): "SE(3)"}.get(shape, "")
+
+
+def attitudes_and_positions(sol: Any) -> tuple[dict[str, np.ndarray], list[Panel]]:
+    """Rotations (drawn as body axes) of rotation and pose states, and the position panels
+    of poses (the translation of an SE(3) element, the plane's x, y and heading of SE(2))."""
+    rotations: dict[str, np.ndarray] = {}
+    panels: list[Panel] = []
+    for k, g in sol.states.items():
+        kind = manifold(sol, k)
+        if kind == "SO(3)":
+            rotations[k] = g
+        elif kind == "SE(3)":
+            rotations[k] = g[:, :3, :3]
+            panels.append((f"position of {k}", sol.t, g[:, :3, 3], ["x", "y", "z"]))
+        elif kind == "SE(2)":
+            heading = np.unwrap(np.arctan2(g[:, 1, 0], g[:, 0, 0]))
+            panels.append((f"pose {k}", sol.t, np.column_stack([g[:, :2, 2], heading]),
+                           ["x", "y", "heading (rad)"]))
+    return rotations, panels
+
+
 def plot_solution(sol: Any, path: str | Path, dpi: int = 110) -> Path:
     """Write a PNG: one panel per quantity; rotations drawn as body axes on the unit sphere."""
     import io
@@ -32,11 +60,10 @@ def plot_solution(sol: Any, path: str | Path, dpi: int = 110) -> Path:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    rotations = {k: v for k, v in sol.states.items() if np.ndim(v) == 3}
-    vectors = {k: v for k, v in sol.states.items() if np.ndim(v) == 2}
-    panels: list[tuple[str, np.ndarray, np.ndarray, list[str]]] = []
-    for k, v in vectors.items():
-        panels.append((f"state {k}", sol.t, v, [f"{k}{i + 1}" for i in range(v.shape[1])]))
+    rotations, panels = attitudes_and_positions(sol)
+    for k, v in sol.states.items():
+        if np.ndim(v) == 2:
+            panels.append((f"state {k}", sol.t, v, [f"{k}{i + 1}" for i in range(v.shape[1])]))
     for k, v in sol.velocities.items():
         panels.append((f"velocity {k}", sol.velocity_t, v,
                        [f"{k}{i + 1}" for i in range(v.shape[1])]))

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import functools
+
 import casadi as ca
 import numpy as np
 import pytest
@@ -10,7 +12,7 @@ from hypothesis import given, strategies as st
 from ocgroupoid.errors import ConfigError
 from ocgroupoid.groupoid import Groupoid, LieGroupFactor, Pair, SphereAction
 from ocgroupoid.groupoid.base import BoundaryMask
-from ocgroupoid.lie import RETRACTION_NAMES, SO3, retraction, so3
+from ocgroupoid.lie import RETRACTION_NAMES, SE2, SE3, SO3, retraction, se3, so3
 
 from .strategies import in_ball, vectors
 
@@ -23,8 +25,29 @@ def same(a, b) -> bool:
     return np.allclose(a, b, atol=1e-10)
 
 
-FACTORS = [LieGroupFactor(), LieGroupFactor(side="left"), Pair(2), SphereAction()]
-every_factor = pytest.mark.parametrize("f", FACTORS, ids=lambda f: f"{type(f).__name__}-{f.side}")
+GROUP_FACTORS = [LieGroupFactor(G, side=side) for G in (SO3, SE3, SE2)
+                 for side in ("right", "left")]
+FACTORS = [*GROUP_FACTORS, Pair(2), SphereAction()]
+
+
+def factor_id(f) -> str:
+    return f"{type(f).__name__}-{f.group.name}-{f.side}"
+
+
+def defined(name: str, f) -> bool:
+    """Whether the retraction ``name`` exists on the factor's group (first_order: SO(3))."""
+    try:
+        retraction(name, f.group)
+    except ConfigError:
+        return False
+    return True
+
+
+every_factor = pytest.mark.parametrize("f", FACTORS, ids=factor_id)
+every_group_factor = pytest.mark.parametrize("f", GROUP_FACTORS, ids=factor_id)
+every_factor_and_retraction = pytest.mark.parametrize(
+    "f, name", [(f, n) for f in FACTORS for n in RETRACTION_NAMES if defined(n, f)],
+    ids=lambda v: v if isinstance(v, str) else factor_id(v))
 seeds = st.integers(0, 2**32 - 1)
 
 
@@ -60,15 +83,16 @@ def test_step_is_the_target_of_the_element(f, seed: int, a: np.ndarray) -> None:
                        f.target(f.element(s, ret.tau(a))))
 
 
-def test_spatial_convention_is_left_multiplication() -> None:
-    """Spatial factor: R_{k+1} = w_k R_k (dR/dt = hat(w) R); body: R_{k+1} = R_k w_k."""
-    ret = retraction("cayley", SO3)
-    a = np.array([0.2, -0.4, 0.1])
-    R = so3.from_rotvec([0.5, 0.3, -1.0])
-    q = so3.to_quaternion(R)
-    left, right = LieGroupFactor(side="left"), LieGroupFactor(side="right")
-    assert np.allclose(left.matrix(np.asarray(left.step(q, ret, a))), ret.tau(a) @ R)
-    assert np.allclose(right.matrix(np.asarray(right.step(q, ret, a))), R @ ret.tau(a))
+@pytest.mark.parametrize("G", [SO3, SE3, SE2], ids=lambda G: G.name)
+def test_spatial_convention_is_left_multiplication(G) -> None:
+    """Spatial factor: g_{k+1} = w_k g_k (dg/dt = hat(xi) g); body: g_{k+1} = g_k w_k."""
+    ret = retraction("cayley", G)
+    a = np.array([0.2, -0.4, 0.1, 0.7, -0.3, 1.1])[:G.dim]
+    g = G.exp(np.array([0.5, 0.3, -1.0, 0.2, 0.9, -0.4])[:G.dim])
+    left, right = LieGroupFactor(G, side="left"), LieGroupFactor(G, side="right")
+    s = G.form.of_matrix(g)
+    assert np.allclose(left.matrix(np.asarray(left.step(s, ret, a))), ret.tau(a) @ g)
+    assert np.allclose(right.matrix(np.asarray(right.step(s, ret, a))), g @ ret.tau(a))
 
 
 @every_factor
@@ -126,32 +150,43 @@ def test_chart_has_no_root_but_the_target(f, seed: int) -> None:
         assert not np.all(np.isfinite(c)) or np.linalg.norm(c) >= 0.5 * dist - 1e-12, (c, dist)
 
 
-@every_factor
-@pytest.mark.parametrize("name", RETRACTION_NAMES)
-@given(seed=seeds)
-def test_every_geodesic_guess_lands_on_the_target(f, name: str, seed: int) -> None:
-    """Each alternative of a factor's guesses, stepped N times from the start, reaches the
-    prescribed end (a free end: rest); the preferred one is the shortest."""
-    rng = np.random.default_rng(seed)
-    ret, N, T = retraction(name, f.group), 12, 2.0
-    s0, sT = f.sample_state(rng), f.sample_state(rng)
+@functools.lru_cache(maxsize=None)
+def guess_and_step(f, name: str, N: int) -> tuple[list[str], ca.Function, ca.Function]:
+    """The labels of a factor's guesses, their graph of (start, end, V0, VN, T) and its step
+    as a Function of (s, a), built once per factor and retraction."""
+    ret = retraction(name, f.group)
     start, end = (ca.MX.sym(n, f.target_size) for n in ("start", "end"))
     V0, VN, Ts = ca.MX.sym("V0", f.algebra_dim), ca.MX.sym("VN", f.algebra_dim), ca.MX.sym("T")
     flags = np.ones(f.algebra_dim, bool)
     alts = f.guesses(ret, start, end, V0, VN, Ts, N, BoundaryMask(np.ones(f.state_dim, bool),
                                                                  flags, flags))
-    fun = ca.Function("g", [start, end, V0, VN, Ts], [xi for _, xi in alts])
+    s, a = ca.SX.sym("s", f.state_size), ca.SX.sym("a", f.algebra_dim)
+    return ([label for label, _ in alts],
+            ca.Function("g", [start, end, V0, VN, Ts], [xi for _, xi in alts]),
+            ca.Function("step", [s, a], [f.step(s, ret, a)]))
+
+
+@every_factor_and_retraction
+@given(seed=seeds)
+def test_every_geodesic_guess_lands_on_the_target(f, name: str, seed: int) -> None:
+    """Each alternative of a factor's guesses, stepped N times from the start, reaches the
+    prescribed end (a free end: rest); the preferred one turns the least (the sum of the
+    steps' rotation angles, ``Retraction.step_norm``)."""
+    rng = np.random.default_rng(seed)
+    ret, N, T = retraction(name, f.group), 12, 2.0
+    s0, sT = f.sample_state(rng), f.sample_state(rng)
+    labels, fun, step = guess_and_step(f, name, N)
     outs = fun(f.pack_target(s0), f.pack_target(sT), np.zeros(f.algebra_dim),
                np.zeros(f.algebra_dim), T)
     outs = outs if isinstance(outs, (list, tuple)) else [outs]
     lengths = []
-    for (label, _), xi in zip(alts, outs):
+    for label, xi in zip(labels, outs):
         xi, s = np.array(xi), np.asarray(s0, dtype=float)
         for k in range(N):
-            s = np.asarray(f.step(s, ret, T / N * xi[:, k]), dtype=float).ravel()
+            s = np.array(step(s, T / N * xi[:, k])).ravel()
         assert f.terminal_error(s, sT, np.ones(f.state_dim, bool)) <= 1e-9, label
-        lengths.append(np.sum(np.linalg.norm(xi, axis=0)))
-    assert lengths[0] == min(lengths)
+        lengths.append(np.sum(ret.step_norm(T / N * xi.T)))
+    assert lengths[0] <= min(lengths) + 1e-12
 
 
 def test_product_layout_and_names() -> None:
@@ -165,7 +200,7 @@ def test_product_layout_and_names() -> None:
 
 
 @every_factor
-@given(seed=seeds, a=vectors(3, 1.0))
+@given(seed=seeds, a=vectors(6, 1.0))
 def test_symbolic_step_matches_numeric(f, seed: int, a: np.ndarray) -> None:
     ret = retraction("cayley", f.group)
     a = a[:f.algebra_dim]
@@ -175,8 +210,7 @@ def test_symbolic_step_matches_numeric(f, seed: int, a: np.ndarray) -> None:
     assert np.allclose(np.array(F(s, a)).ravel(), np.asarray(f.step(s, ret, a)).ravel())
 
 
-@every_factor
-@pytest.mark.parametrize("name", RETRACTION_NAMES)
+@every_factor_and_retraction
 @given(seed=seeds)
 def test_coordinate_rate_moves_the_state_with_the_velocity(f, name: str, seed: int) -> None:
     """With dTheta/dt = coordinate_rate(Theta, y), s(t) = step(s_k, tau(Theta(t))) moves at
@@ -218,3 +252,45 @@ def test_magnus_step_has_local_order_five(f, seed: int) -> None:
         step = np.asarray(f.step(s0, ret, W), dtype=float).ravel()
         errors.append(f.terminal_error(step, exact, np.ones(f.state_dim, bool)))
     assert errors[1] <= 1e-12 or errors[0] / errors[1] >= 2**4.5, errors
+
+
+@every_group_factor
+@given(seed=seeds)
+def test_stored_state_round_trips(f, seed: int) -> None:
+    """A state parsed from its matrix is itself; the packed target of any multiple of it
+    (sign free) is it; users see its matrix row-major; a zero quaternion is invalid."""
+    s = f.sample_state(np.random.default_rng(seed))
+    M = f.matrix(s)
+    assert f.distance(s) <= 1e-12
+    assert np.allclose(f.parse_state(M), s, atol=1e-12)
+    assert np.allclose(np.asarray(f.shown(s)).reshape(f.shown_shape), M, atol=1e-15)
+    rot = f.state_size - (f.algebra_dim - len(range(f.algebra_dim)[f.group.turning]))
+    scaled = s.copy()
+    scaled[:rot] *= -3.0
+    assert np.allclose(np.asarray(f.pack_target(scaled)).ravel(), s, atol=1e-15)
+    scaled[:rot] = 0
+    assert float(f.invalid(ca.DM(scaled))) == 1.0 and float(f.invalid(ca.DM(s))) == 0.0
+
+
+def test_group_factor_words_and_sizes() -> None:
+    """What messages and parameter files say of each group's states."""
+    words = [(f.manifold, f.value_kind, f.state_size, f.state_dim, f.shown_shape)
+             for f in GROUP_FACTORS[::2]]
+    assert words == [("SO(3)", "rotation", 4, 3, (3, 3)), ("SE(3)", "pose", 7, 6, (4, 4)),
+                     ("SE(2)", "pose", 4, 3, (3, 3))]
+    with pytest.raises(ConfigError, match="use Pair for R\\^n"):
+        LieGroupFactor(Pair(2).group)
+
+
+def test_pose_values_in_every_form() -> None:
+    """SE(3) states from a 4 x 4 matrix, 7 numbers, identity, or rotation and position."""
+    f = LieGroupFactor(SE3, state="g", velocity="xi")
+    R = so3.from_axis_angle([1, 2, 3], 1.5)
+    g = se3.from_spec({"rotation": R, "position": [1.0, 0.5, -0.3]})
+    s = f.parse_state({"rotation": {"axis_angle": {"axis": [1, 2, 3], "angle": 1.5}},
+                       "position": [1.0, 0.5, -0.3]})
+    for value in (g, g.tolist(), s, -np.concatenate([s[:4], -s[4:]])):
+        assert np.allclose(f.parse_state(value), s, atol=1e-12)
+    assert np.allclose(f.parse_state("identity"), [1, 0, 0, 0, 0, 0, 0])
+    with pytest.raises(ConfigError, match="a pose is"):
+        f.parse_state([1.0, 0.0, 0.0])

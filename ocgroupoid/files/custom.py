@@ -4,7 +4,7 @@ The ``definition`` section lists the factors of the groupoid and writes the redu
 the cost and extra constraints as expression strings (see :mod:`ocgroupoid.expressions`)::
 
     definition:
-      groupoid: [{type: so3, state: R, velocity: Omega}]   # so3 | pair (dim: n) | sphere
+      groupoid: [{type: so3, state: R, velocity: Omega}]   # so3 | se3 | se2 | pair | sphere
       lagrangian: "0.5*dot(Omega, inertia*Omega)"          # second order: mechanics
       actuated: [Omega]                                    # velocities carrying controls
       input_matrix: "diag(inertia)"                        # F = input_matrix u (default I)
@@ -28,6 +28,7 @@ from pydantic import BaseModel, BeforeValidator, Field, create_model
 from ..errors import ConfigError
 from ..groupoid import Groupoid, LieGroupFactor, Pair, SphereAction
 from ..groupoid.base import Factor
+from ..lie import SE2, SE3, SO3
 from ..model.problem import Problem
 from ..model.values import Strict, check_vector, vector
 from ..models.registry import ModelSpec
@@ -37,13 +38,15 @@ from .expressions import CONSTANTS, FUNCTIONS, compile_expression
 class FactorDefinition(Strict):
     """One factor of the product groupoid."""
 
-    type: Literal["so3", "pair", "sphere"] = Field(
-        description="so3: SO(3) over a point; pair: pair groupoid of R^dim; sphere: S^2 x SO(3)")
+    type: Literal["so3", "se3", "se2", "pair", "sphere"] = Field(
+        description="so3, se3, se2: SO(3), SE(3) (poses), SE(2) (planar poses) over a point; "
+        "pair: pair groupoid of R^dim; sphere: S^2 x SO(3)")
     state: str = Field(description="name of the node state (boundary-condition key)")
     velocity: str = Field(description="name of the velocity")
     dim: int | None = Field(None, ge=1, description="dimension of a pair factor")
     side: Literal["body", "spatial"] = Field(
-        "body", description="so3 only: body R_{k+1} = R_k w_k or spatial R_{k+1} = w_k R_k")
+        "body", description="so3, se3, se2 only: body g_{k+1} = g_k w_k or spatial "
+        "g_{k+1} = w_k g_k")
 
 
 class Definition(Strict):
@@ -59,11 +62,18 @@ class Definition(Strict):
     cost: str = Field(description="running cost integrand")
     constraints: dict[str, str] = Field(default_factory=dict,
                                         description="extra constraints name: expression = 0")
+    path: dict[str, str] = Field(
+        default_factory=dict, description="path inequalities name: expression <= 0, imposed "
+        "wherever the scheme evaluates its constraints (e.g. a keep-out cone)")
+    terminal_cost: str | None = Field(None, description="Mayer term on the final node")
+
+
+GROUPS = {"so3": SO3, "se3": SE3, "se2": SE2}  # the group factor types
 
 
 def _factor(d: FactorDefinition) -> Factor:
-    if d.type == "so3":
-        return LieGroupFactor(state=d.state, velocity=d.velocity,
+    if d.type in GROUPS:
+        return LieGroupFactor(GROUPS[d.type], state=d.state, velocity=d.velocity,
                               side="right" if d.side == "body" else "left")
     if d.type == "sphere":
         return SphereAction(state=d.state, velocity=d.velocity)
@@ -138,9 +148,8 @@ def _problem(d: Definition, G: Groupoid, params: BaseModel, initial: BaseModel,
     for pname, vec in _values(params, where).items():
         sym = pb.parameter(pname, len(vec), vec)
         symbols[pname] = sym if len(vec) > 1 else sym[0]
-    for f in G.factors:
-        if f.base_size:
-            symbols[f.state] = pb.state(f.state)
+    for f in G.factors:  # a state over a point (a rotation) as its matrix: costs, paths
+        symbols[f.state] = pb.state(f.state) if f.base_size else pb.node_state(f.state)
         symbols[f.velocity] = pb.velocity(f.velocity)
         if d.order == 2:
             symbols[f"{f.velocity}_dot"] = pb.acceleration(f.velocity)
@@ -169,6 +178,10 @@ def _problem(d: Definition, G: Groupoid, params: BaseModel, initial: BaseModel,
     pb.minimize(expr(d.cost, "definition", "cost"))
     for cname, text in d.constraints.items():
         pb.subject_to(expr(text, "definition", "constraints", cname), name=cname)
+    for cname, text in d.path.items():
+        pb.bound(expr(text, "definition", "path", cname), upper=0.0, name=cname)
+    if d.terminal_cost is not None:
+        pb.terminal_cost(expr(d.terminal_cost, "definition", "terminal_cost"))
     pb.initial(**{k: v for k, v in initial.model_dump().items() if v is not None})
     pb.final(**{k: v for k, v in final.model_dump().items() if v is not None})
     pb.horizon(T)

@@ -30,6 +30,7 @@ from ..errors import ConfigError
 from ..model.problem import Problem
 from ..models import MODELS
 from ..models.registry import ModelSpec
+from . import bounds
 from .custom import Definition, spec as custom_spec
 from .messages import validate
 from .schema import ProblemFile
@@ -47,6 +48,7 @@ class Config:
     initial: BaseModel
     final: BaseModel
     raw: dict[str, Any] = field(default_factory=dict)
+    locate: Locator = field(default_factory=lambda: Locator(None, {}, set()))
 
     @property
     def name(self) -> str:
@@ -84,9 +86,25 @@ def load(path: str | Path | None = None, overrides: list[str] | None = None,
     sections = [validate(schema, data.get(key), (key,), locate)
                 for key, schema in (("parameters", spec.parameters), ("initial", spec.initial),
                                     ("final", spec.final))]
-    return Config(Path(path) if path is not None else None, top, spec, *sections, raw=data)
+    return Config(Path(path) if path is not None else None, top, spec, *sections, raw=data,
+                  locate=locate)
 
 
 def build(cfg: Config) -> Problem:
-    """The Problem a validated Config describes."""
-    return cfg.spec.build(cfg.parameters, cfg.initial, cfg.final, cfg.file.horizon.T, cfg.name)
+    """The Problem a validated Config describes: the model's, with the file's horizon,
+    objective weights and bounds."""
+    f, locate = cfg.file, cfg.locate
+    horizon = f.horizon
+    pb = cfg.spec.build(cfg.parameters, cfg.initial, cfg.final, horizon.guess, cfg.name)
+    try:
+        if horizon.T == "free":
+            pb.horizon(horizon.guess, free=True, T_min=horizon.T_min, T_max=horizon.T_max)
+        if f.objective.time > 0 and horizon.T != "free":
+            raise ConfigError(f"{locate('objective', 'time')}: a time weight needs a free "
+                              "final time: write horizon.T: free with T_min and T_max")
+        if (f.objective.effort, f.objective.time) != (1.0, 0.0):
+            pb.objective(f.objective.effort, f.objective.time)
+    except ConfigError as err:
+        raise ConfigError(f"{locate('horizon')}: {err}") from None
+    bounds.apply(pb, f.bounds, locate)
+    return pb

@@ -8,19 +8,71 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from pydantic import Field
+from pydantic import BeforeValidator, Field, model_validator
 
 from ..lie.retraction import RETRACTION_NAMES
-from ..model.values import Horizon as HorizonT
-from ..model.values import Strict
+from ..model.values import Strict, number, positive
 from ..nlp.schemes import SCHEME_NAMES
 
 
-class Horizon(Strict):
-    """Final time and number of intervals."""
+def _final_time(v: Any) -> Any:
+    """A positive number, or ``free`` (a decision variable)."""
+    if v == "free":
+        return v
+    if isinstance(v, str):
+        raise ValueError(f"T must be a number > 0 or free, got {v!r}")
+    return positive(v, "T")
 
-    T: HorizonT = Field(description="final time (> 0)")
+
+def _nonnegative(v: Any, what: str = "value") -> float:
+    x = number(v, what)
+    if x < 0:
+        raise ValueError(f"{what} must be >= 0, got {x}")
+    return x
+
+
+PositiveNumber = Annotated[float, BeforeValidator(positive)]
+Weight = Annotated[float, BeforeValidator(_nonnegative)]
+
+
+class Horizon(Strict):
+    """Final time (fixed, or free within bounds) and number of intervals."""
+
+    T: Annotated[Any, BeforeValidator(_final_time)] = Field(
+        description="final time (> 0), or free: a decision variable within [T_min, T_max]")
     N: Annotated[int, Field(strict=True, ge=2, description="number of intervals (>= 2)")]
+    T_min: PositiveNumber | None = Field(None, description="lower bound of a free T")
+    T_max: PositiveNumber | None = Field(None, description="upper bound of a free T")
+    T_guess: PositiveNumber | None = Field(
+        None, description="initial guess of a free T (default: the middle of [T_min, T_max])")
+
+    @model_validator(mode="after")
+    def _free_needs_bounds(self) -> "Horizon":
+        if self.T == "free":
+            if self.T_min is None or self.T_max is None:
+                raise ValueError("T: free needs T_min and T_max (the range T may take)")
+            if not self.T_min <= self.guess <= self.T_max:
+                raise ValueError(f"T_guess {self.guess} must lie in [T_min, T_max] = "
+                                 f"[{self.T_min}, {self.T_max}]")
+        elif self.T_min is not None or self.T_max is not None or self.T_guess is not None:
+            raise ValueError("T_min, T_max and T_guess belong to T: free; remove them or "
+                             "write T: free")
+        return self
+
+    @property
+    def guess(self) -> float:
+        """T itself, or the initial guess of a free T."""
+        if self.T != "free":
+            return float(self.T)
+        assert self.T_min is not None and self.T_max is not None
+        return self.T_guess if self.T_guess is not None else (self.T_min + self.T_max) / 2
+
+
+class ObjectiveSection(Strict):
+    """``effort * (the model's cost) + time * T``."""
+
+    effort: Weight = Field(1.0, description="weight of the model's running cost")
+    time: Weight = Field(0.0, description="weight of the final time (needs T: free)")
 
 
 class DiscretizationSection(Strict):
@@ -31,6 +83,8 @@ class DiscretizationSection(Strict):
     retraction: Literal[RETRACTION_NAMES] = Field(  # type: ignore[valid-type]
         "cayley", description="cayley (default), exp, or first_order (the seeds' rule)")
     rule: str = Field("midpoint", description="discretisation rule of the constraints")
+    steps: Literal["uniform", "adaptive"] = Field(
+        "uniform", description="uniform steps h = T/N, or adaptive ones (order4)")
 
 
 class SolverSection(Strict):
@@ -62,6 +116,10 @@ class ProblemFile(Strict):
     horizon: Horizon
     initial: dict[str, Any] = Field(default_factory=dict, description="initial conditions")
     final: dict[str, Any] = Field(default_factory=dict, description="final conditions")
+    bounds: dict[str, Any] = Field(
+        default_factory=dict, description="name: [lower, upper] (per component: a list of "
+        "pairs; null: open) for controls (u: all of them), velocities and R^n states")
+    objective: ObjectiveSection = Field(default_factory=ObjectiveSection)
     discretization: DiscretizationSection = Field(default_factory=DiscretizationSection)
     solver: SolverSection = Field(default_factory=SolverSection)
     output: OutputSection = Field(default_factory=OutputSection)

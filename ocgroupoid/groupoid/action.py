@@ -121,7 +121,7 @@ class SphereAction(Factor):
         turns = angle > 1e-12
         axis = ca.if_else(turns, v / safe_if(turns, angle, 1.0), tangent_basis(start[:3])[0])
         h = T / N
-        return [(name, ca.repmat(ret.tau_inv_quat(so3.quat_exp(-axis * phi / N)) / h, 1, N))
+        return [(name, ca.repmat(ret.tau_inv_state(so3.quat_exp(-axis * phi / N)) / h, 1, N))
                 for name, phi in (("great circle", angle),
                                   ("great circle, long way", angle - 2 * np.pi))]
 

@@ -55,7 +55,7 @@ class Factor(ABC):
     base_size: int  # coordinates of the base the Lagrangian sees (0 over a point)
     target_size: int  # length of the packed boundary value of a state (state + chart data)
     componentwise: bool = False  # True when single state components may be left free
-    value_kind: str  # how a parameter file writes the state: rotation, direction, vector
+    value_kind: str  # how a parameter file writes the state: rotation, pose, direction, vector
     value_meaning: str  # one line for parameter-file documentation
 
     @property

@@ -1,7 +1,8 @@
 """Lie groups and retractions, written once for NumPy and CasADi SX/MX."""
 
-from . import so3
-from .group import LieGroup
+from . import se2, se3, so3
+from .form import StateForm
+from .group import LieGroup, MatrixGroup
 from .retraction import (
     RETRACTION_NAMES,
     Cayley,
@@ -15,9 +16,12 @@ from .retraction import (
     retraction,
 )
 from .rn import Rn
+from .se2 import SE2
+from .se3 import SE3
 from .so3 import SO3
 
 __all__ = [
-    "LieGroup", "SO3", "Rn", "so3", "Retraction", "Cayley", "Exp", "FirstOrder",
-    "Translation", "retraction", "RETRACTION_NAMES", "cay", "dcay", "dcay_inv",
+    "LieGroup", "MatrixGroup", "StateForm", "SO3", "SE3", "SE2", "Rn", "so3", "se3", "se2",
+    "Retraction", "Cayley", "Exp", "FirstOrder", "Translation", "retraction",
+    "RETRACTION_NAMES", "cay", "dcay", "dcay_inv",
 ]

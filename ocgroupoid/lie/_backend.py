@@ -58,3 +58,11 @@ def dual(fn: F) -> F:
 def safe_if(small: Any, taylor: Any, exact: Any) -> Any:
     """``if_else`` whose branches were both built finite (the jaxlie 'safe' trick)."""
     return ca.if_else(small, taylor, exact)
+
+
+def series(x: Any, coefficients: tuple[float, ...]) -> Any:
+    """``sum_k c_k x^k`` by Horner's rule (the Taylor branch of a guarded formula)."""
+    out: Any = coefficients[-1]
+    for c in reversed(coefficients[:-1]):
+        out = out * x + c
+    return out

@@ -7,6 +7,12 @@ its inverse ``dtau_inv`` (seed 000, Appendix D, eq. 64; seed 001, §6.1):
 
 The left-trivialised ones follow from tau(-a) = tau(a)^{-1}:
 ``tau(a)^{-1} d tau(a)[b] = hat(dtau(-a) b)``, exposed as ``dtau_left``/``dtau_inv_left``.
+Node states use ``tau_state``/``tau_inv_state``, the same map on the group's stored form
+(:mod:`ocgroupoid.lie.form`).
+
+The Cayley map and the exponential are written once over every
+:class:`~ocgroupoid.lie.group.MatrixGroup` (SO(3), SE(3), SE(2)), which supplies their
+formulas; the seeds' first-order rule is SO(3)'s alone.
 
 Singularities are reported, not hidden: on NumPy input ``tau_inv`` raises
 :class:`SingularityError` with the fix (a smaller step, i.e. a larger N).
@@ -15,6 +21,7 @@ Singularities are reported, not hidden: on NumPy input ``tau_inv`` raises
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -22,8 +29,9 @@ import numpy as np
 from ..errors import ConfigError, SingularityError
 from . import so3
 from ._backend import dual, is_symbolic, safe_if
-from .group import Array, LieGroup
+from .group import Array, LieGroup, MatrixGroup
 from .rn import Rn
+from .so3 import cay, dcay, dcay_inv
 
 RETRACTION_NAMES = ("cayley", "exp", "first_order")
 
@@ -33,7 +41,8 @@ class Retraction(ABC):
 
     name: str
     group: LieGroup
-    #: the step norm |a| near which the retraction degenerates (quoted by hints)
+    #: the rotation angle of one step near which the retraction degenerates (quoted by
+    #: hints), as :meth:`step_norm` measures it
     step_limit: float = float("inf")
 
     @abstractmethod
@@ -44,13 +53,14 @@ class Retraction(ABC):
     def tau_inv(self, g: Array) -> Array:
         """The algebra element a with tau(a) = g."""
 
-    def tau_quat(self, a: Array) -> Array:
-        """The unit quaternion (w, x, y, z) of tau(a), for groups that have one (SO(3))."""
-        raise NotImplementedError(f"{self.name} on {self.group.name} has no quaternion form")
+    def tau_state(self, a: Array) -> Array:
+        """tau(a) in the group's stored form (:class:`~ocgroupoid.lie.form.StateForm`): a unit
+        quaternion on SO(3), quaternion and position on SE(3), ..."""
+        raise NotImplementedError(f"{self.name} on {self.group.name} has no stored form")
 
-    def tau_inv_quat(self, q: Array) -> Array:
-        """``tau_inv`` of the rotation of a unit quaternion (either sign), on graphs too."""
-        raise NotImplementedError(f"{self.name} on {self.group.name} has no quaternion form")
+    def tau_inv_state(self, s: Array) -> Array:
+        """``tau_inv`` of a stored element (either sign of its quaternion), on graphs too."""
+        raise NotImplementedError(f"{self.name} on {self.group.name} has no stored form")
 
     @abstractmethod
     def dtau(self, a: Array) -> Array:
@@ -68,108 +78,80 @@ class Retraction(ABC):
         """Inverse of ``dtau_left(a)``."""
         return self.dtau_inv(-a)
 
+    def step_norm(self, a: Any) -> np.ndarray:
+        """The rotation angle of numeric steps (one per row of a), which ``step_limit``
+        refers to: |a| on SO(3) and R^n, |omega| on SE(n)."""
+        return np.linalg.norm(np.asarray(a, dtype=float)[..., self.group.turning], axis=-1)
+
     def __repr__(self) -> str:
         return f"{self.name}({self.group.name})"
 
 
-# ------------------------------------------------------------------------------- SO(3)
-
-
-@dual
-def cay(a: Array) -> Array:
-    """Cayley map on so(3) (eq. 63): ``I + 4/(4 + |a|^2) (hat(a) + hat(a)^2/2)``."""
-    A = so3.hat(a)
-    return ca.DM.eye(3) + 4 / (4 + ca.dot(a, a)) * (A + ca.mtimes(A, A) / 2)
-
-
-@dual
-def _cay_quat(a: Array) -> Array:
-    return ca.vertcat(1, a / 2) / ca.sqrt(1 + ca.dot(a, a) / 4)
-
-
-@dual
-def _cay_inv_quat(q: Array) -> Array:
-    return 2 * q[1:4] / q[0]
-
-
-@dual
-def _cay_inv(R: Array) -> Array:
-    return 2 * so3.vee_skew(R) * 2 / (1 + ca.trace(R))
-
-
-@dual
-def dcay(a: Array) -> Array:
-    """Right-trivialised derivative of cay (eq. 64): ``2/(4 + |a|^2) (2 I + hat(a))``."""
-    return 2 / (4 + ca.dot(a, a)) * (2 * ca.DM.eye(3) + so3.hat(a))
-
-
-@dual
-def dcay_inv(a: Array) -> Array:
-    """Inverse of ``dcay`` (eq. 64): ``I - hat(a)/2 + a a^T/4``."""
-    return ca.DM.eye(3) - so3.hat(a) / 2 + ca.mtimes(a, a.T) / 4
+# ----------------------------------------------------------------- SO(3), SE(3), SE(2)
 
 
 class Cayley(Retraction):
-    """cay(a) = (I - hat(a)/2)^{-1} (I + hat(a)/2); rational, singular only at angle pi."""
+    """cay(a) = (I - hat(a)/2)^{-1} (I + hat(a)/2); rational, singular only at a rotation of
+    pi (eq. 63 on SO(3); Kobilarov & Marsden 2011 on SE(3))."""
 
     name = "cayley"
-    group = so3.SO3
     step_limit = float(np.pi)
 
+    def __init__(self, group: MatrixGroup = so3.SO3) -> None:
+        self.group: MatrixGroup = group
+
     def tau(self, a: Array) -> Array:
-        return cay(a)
+        return self.group.cay(a)
 
     def tau_inv(self, g: Array) -> Array:
-        """``cay^{-1}(R) = 4 vee_skew(R) / (1 + tr R)``; undefined for a rotation of pi."""
-        if not is_symbolic(g):
-            g = np.asarray(g, dtype=float)
-            if 1.0 + np.trace(g) < 1e-10:
-                raise SingularityError(
-                    "Cayley map singular: rotation of pi in one step; increase N "
-                    f"(1 + tr R = {1.0 + np.trace(g):.2e})"
-                )
-        return _cay_inv(g)
+        """Undefined for a rotation of pi (a SingularityError on NumPy input)."""
+        return self.group.cay_inv(g)
 
-    def tau_quat(self, a: Array) -> Array:
-        """``(1, a/2)/sqrt(1 + |a|^2/4)``."""
-        return _cay_quat(a)
+    def tau_state(self, a: Array) -> Array:
+        """E.g. ``(1, a/2)/sqrt(1 + |a|^2/4)`` on SO(3)."""
+        return self.group.form.cay(a)
 
-    def tau_inv_quat(self, q: Array) -> Array:
-        """``2 q_v / q_w``."""
-        return _cay_inv_quat(q)
+    def tau_inv_state(self, s: Array) -> Array:
+        """E.g. ``2 q_v / q_w`` on SO(3)."""
+        return self.group.form.cay_inv(s)
 
     def dtau(self, a: Array) -> Array:
-        return dcay(a)
+        return self.group.dcay(a)
 
     def dtau_inv(self, a: Array) -> Array:
-        return dcay_inv(a)
+        return self.group.dcay_inv(a)
 
 
 class Exp(Retraction):
-    """The exponential map; ``dtau`` is the left Jacobian of SO(3)."""
+    """The exponential map; ``dtau`` is the group's left Jacobian."""
 
     name = "exp"
-    group = so3.SO3
     step_limit = float(np.pi)
 
+    def __init__(self, group: MatrixGroup = so3.SO3) -> None:
+        self.group: MatrixGroup = group
+
     def tau(self, a: Array) -> Array:
-        return so3.exp(a)
+        return self.group.exp(a)
 
     def tau_inv(self, g: Array) -> Array:
-        return so3.log(g)
+        return self.group.log(g)
 
-    def tau_quat(self, a: Array) -> Array:
-        """``(cos(t/2), sin(t/2) a/t)``, t = |a|."""
-        return so3.quat_exp(a)
+    def tau_state(self, a: Array) -> Array:
+        """E.g. ``(cos(t/2), sin(t/2) a/t)``, t = |a|, on SO(3)."""
+        return self.group.form.exp(a)
 
-    def tau_inv_quat(self, q: Array) -> Array:
-        return so3.quat_log(q)
+    def tau_inv_state(self, s: Array) -> Array:
+        return self.group.form.log(s)
 
     def dtau(self, a: Array) -> Array:
-        return so3.dexp(a)
+        return self.group.dexp(a)
 
     def dtau_inv(self, a: Array) -> Array:
-        return so3.dexp_inv(a)
+        return self.group.dexp_inv(a)
+
+
+# -------------------------------------------------------------- SO(3): the seeds' rule
 
 
 def _asin_ratio(x2: Array) -> tuple[Array, Array]:
@@ -248,11 +230,12 @@ class FirstOrder(Retraction):
                 )
         return so3.vee_skew(g)
 
-    def tau_quat(self, a: Array) -> Array:
-        """``(w, a/(2w))`` with ``w = cos(angle/2) = sqrt((1 + sqrt(1 - |a|^2))/2)``."""
+    def tau_state(self, a: Array) -> Array:
+        """The unit quaternion ``(w, a/(2w))``, ``w = cos(angle/2) = sqrt((1 + sqrt(1 -
+        |a|^2))/2)``."""
         return _first_order_quat(a)
 
-    def tau_inv_quat(self, q: Array) -> Array:
+    def tau_inv_state(self, q: Array) -> Array:
         """``vee_skew(R(q)) = 2 q_w q_v / |q|^2`` (sin(angle) times the axis)."""
         return _first_order_inv_quat(q)
 
@@ -290,7 +273,8 @@ class Translation(Retraction):
 def retraction(name: str, group: LieGroup) -> Retraction:
     """The retraction called ``name`` (``cayley``, ``exp``, ``first_order``) on ``group``.
 
-    On R^n all three coincide with the translation.
+    On R^n all three coincide with the translation; ``first_order`` is the seeds' rule on
+    SO(3) only.
     """
     if name not in RETRACTION_NAMES:
         raise ConfigError(
@@ -298,9 +282,14 @@ def retraction(name: str, group: LieGroup) -> Retraction:
         )
     if isinstance(group, Rn):
         return Translation(group)
-    if group is not so3.SO3:
+    if not isinstance(group, MatrixGroup):
         raise ConfigError(f"no retraction {name!r} is implemented for {group.name}")
-    return {"cayley": Cayley, "exp": Exp, "first_order": FirstOrder}[name]()
+    if name == "first_order":
+        if group is not so3.SO3:
+            raise ConfigError(f"the first_order retraction is the seeds' rule on SO(3); on "
+                              f"{group.name} choose cayley or exp")
+        return FirstOrder()
+    return Cayley(group) if name == "cayley" else Exp(group)
 
 
 __all__ = ["Retraction", "Cayley", "Exp", "FirstOrder", "Translation", "retraction", "cay",

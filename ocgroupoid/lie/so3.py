@@ -1,4 +1,5 @@
-"""SO(3): hat, vee, exp, log, Ad, ad, and the rotation constructors used by problem files.
+"""SO(3): hat, vee, exp, log, Ad, ad, the Cayley map, unit quaternions (the stored form of
+node states, :class:`Quaternion`) and the rotation constructors used by problem files.
 
 Conventions: ``hat(w) v = w x v``; vectors are CasADi columns or 1-D NumPy arrays; a
 rotation is a 3 x 3 matrix. Formulas with a removable singularity at angle 0 switch to a
@@ -7,15 +8,17 @@ Taylor branch built from a guarded argument, so neither value nor derivative is 
 
 from __future__ import annotations
 
+import sys
 import difflib
 from typing import Any, Sequence
 
 import casadi as ca
 import numpy as np
 
-from ..errors import ConfigError
+from ..errors import ConfigError, SingularityError
 from ._backend import dual, is_symbolic, safe_if, to_numpy
-from .group import Array, LieGroup
+from .form import Side, StateForm, Steps, pure
+from .group import Array, MatrixGroup
 
 _SMALL = 1e-2  # below this squared angle the Taylor branches are exact to 1e-16
 
@@ -107,6 +110,54 @@ def dexp_inv(w: Array) -> Array:
     return ca.DM.eye(3) - W / 2 + D * ca.mtimes(W, W)
 
 
+# ----------------------------------------------------------------------- Cayley map
+
+
+@dual
+def cay(a: Array) -> Array:
+    """Cayley map on so(3) (seed 000, eq. 63): ``I + 4/(4 + |a|^2) (hat(a) + hat(a)^2/2)``."""
+    A = hat(a)
+    return ca.DM.eye(3) + 4 / (4 + ca.dot(a, a)) * (A + ca.mtimes(A, A) / 2)
+
+
+@dual
+def _cay_inv(R: Array) -> Array:
+    return 2 * vee_skew(R) * 2 / (1 + ca.trace(R))
+
+
+def cay_inv(R: Array) -> Array:
+    """``cay^{-1}(R) = 4 vee_skew(R) / (1 + tr R)``; undefined for a rotation of pi (a
+    :class:`SingularityError` on NumPy input, with the fix)."""
+    if not is_symbolic(R):
+        R = np.asarray(R, dtype=float)
+        if 1.0 + np.trace(R) < 1e-10:
+            raise SingularityError(
+                "Cayley map singular: rotation of pi in one step; increase N "
+                f"(1 + tr R = {1.0 + np.trace(R):.2e})"
+            )
+    return _cay_inv(R)
+
+
+@dual
+def dcay(a: Array) -> Array:
+    """Right-trivialised derivative of cay (eq. 64): ``2/(4 + |a|^2) (2 I + hat(a))``."""
+    return 2 / (4 + ca.dot(a, a)) * (2 * ca.DM.eye(3) + hat(a))
+
+
+@dual
+def dcay_inv(a: Array) -> Array:
+    """Inverse of ``dcay`` (eq. 64): ``I - hat(a)/2 + a a^T/4``."""
+    return ca.DM.eye(3) - hat(a) / 2 + ca.mtimes(a, a.T) / 4
+
+
+@dual
+def half_cay_inv(a: Array) -> Array:
+    """``(I - hat(a)/2)^{-1} = I + (B + B^2)/(1 + |a|^2/4)``, B = hat(a)/2 (as B^3 =
+    -|a|^2/4 B): the factor that ``cay`` on SE(3) applies to the translation."""
+    B = hat(a) / 2
+    return ca.DM.eye(3) + (B + ca.mtimes(B, B)) / (1 + ca.dot(a, a) / 4)
+
+
 def _log_symbolic(R: Array) -> Array:
     """log on CasADi graphs: ``theta/sin(theta) * vee_skew(R)``, valid for angle < pi."""
     s_vec = vee_skew(R)
@@ -177,6 +228,25 @@ def quat_to_matrix(q: Array) -> Array:
     """R(q) = (w^2 - |v|^2) I + 2 v v^T + 2 w hat(v); orthogonal exactly when |q| = 1."""
     w, v = q[0], q[1:4]
     return (w**2 - ca.dot(v, v)) * ca.DM.eye(3) + 2 * ca.mtimes(v, v.T) + 2 * w * hat(v)
+
+
+@dual
+def quat_cay(a: Array) -> Array:
+    """Unit quaternion of cay(a): ``(1, a/2)/sqrt(1 + |a|^2/4)``."""
+    return ca.vertcat(1, a / 2) / ca.sqrt(1 + ca.dot(a, a) / 4)
+
+
+@dual
+def quat_cay_inv(q: Array) -> Array:
+    """``cay^{-1}`` of the rotation of a quaternion: ``2 q_v / q_w`` (either sign)."""
+    return 2 * q[1:4] / q[0]
+
+
+@dual
+def quat_normalise(x: Array) -> Array:
+    """``x/|x|`` with w >= 0 (the sign of a quaternion is free); zero stays zero."""
+    n = ca.norm_2(x)
+    return x / safe_if(n < 1e-12, 1.0, n) * ca.if_else(x[0] < 0, -1, 1)
 
 
 def Ad(R: Array) -> Array:
@@ -270,7 +340,8 @@ ROTATION_FORMS = ("identity, {rotvec: [x, y, z]}, {axis_angle: {axis: [x, y, z],
 _FORMS = ("rotvec", "axis_angle", "quaternion", "matrix")
 
 
-def _numbers(v: Any, n: int, what: str) -> np.ndarray:
+def number_list(v: Any, n: int, what: str) -> np.ndarray:
+    """n numbers (no booleans), or a ConfigError naming ``what``."""
     if not isinstance(v, (list, tuple, np.ndarray)) or len(v) != n or any(
             isinstance(c, bool) or not isinstance(c, (int, float, np.floating)) for c in v):
         raise ConfigError(f"{what} needs a list of {n} numbers, got {v!r}")
@@ -288,57 +359,116 @@ def from_spec(v: Any) -> np.ndarray:
         raise ConfigError(f"a rotation is {ROTATION_FORMS}; got {v!r}")
     (kind, val), = v.items()
     if kind == "rotvec":
-        return from_rotvec(_numbers(val, 3, "rotvec"))
+        return from_rotvec(number_list(val, 3, "rotvec"))
     if kind == "axis_angle":
         if not isinstance(val, dict) or set(val) != {"axis", "angle"}:
             raise ConfigError("axis_angle needs exactly the keys axis and angle")
         angle = val["angle"]
         if isinstance(angle, bool) or not isinstance(angle, (int, float)):
             raise ConfigError(f"angle must be a number, got {angle!r}")
-        return from_axis_angle(_numbers(val["axis"], 3, "axis"), float(angle))
+        return from_axis_angle(number_list(val["axis"], 3, "axis"), float(angle))
     if kind == "quaternion":
-        return from_quaternion(_numbers(val, 4, "quaternion"))
+        return from_quaternion(number_list(val, 4, "quaternion"))
     if kind == "matrix":
         if not isinstance(val, list) or len(val) != 3:
             raise ConfigError("matrix needs 3 rows of 3 numbers")
-        return from_matrix(np.vstack([_numbers(r, 3, "a matrix row") for r in val]))
+        return from_matrix(np.vstack([number_list(r, 3, "a matrix row") for r in val]))
     close = difflib.get_close_matches(str(kind), _FORMS, 1)
     hint = f"; did you mean {close[0]!r}?" if close else ""
     raise ConfigError(f"unknown rotation form {kind!r}{hint} A rotation is {ROTATION_FORMS}")
 
 
-class _SO3(LieGroup):
-    """The rotation group; elements are 3 x 3 matrices."""
+class Quaternion(StateForm):
+    """SO(3) stored as unit quaternions (w, x, y, z): ``R(p q) = R(p) R(q)``, 4 numbers for
+    3 degrees of freedom, shown as the rotation matrix."""
+
+    size = 4
+    manifold = "SO(3)"
+    kind = "rotation"
+    meaning = "unit quaternion w x y z (normalised; sign free)"
+    shown_shape = (3, 3)
+
+    def compose(self, a: Array, b: Array) -> Array:
+        return quat_multiply(a, b)
+
+    def inverse(self, a: Array) -> Array:
+        return quat_conjugate(a)
+
+    def exp(self, x: Array) -> Array:
+        return quat_exp(x)
+
+    def log(self, s: Array) -> Array:
+        return quat_log(s)
+
+    def cay(self, x: Array) -> Array:
+        return quat_cay(x)
+
+    def cay_inv(self, s: Array) -> Array:
+        return quat_cay_inv(s)
+
+    def body_rate(self, s: Array, y: Array) -> Array:
+        """``q (0, y)/2``."""
+        return quat_multiply(s, pure(y)) / 2
+
+    def spatial_rate(self, s: Array, y: Array) -> Array:
+        """``(0, y) q/2``."""
+        return quat_multiply(pure(y), s) / 2
+
+    def chart(self, e: Array) -> Array:
+        """Cayley coordinates ``2 e_v/e_w``: zero only at e = +-1. The rotation of pi that
+        the skew part of R_T^T R alone would accept (e_w = 0) is a pole here, not a root."""
+        return 2 * e[1:4] / e[0]
+
+    def normalise(self, x: Array) -> Array:
+        return quat_normalise(x)
+
+    def invalid(self, x: Array) -> Array:
+        return ca.norm_2(x) < 1e-12
+
+    def matrix(self, s: Array) -> Array:
+        return quat_to_matrix(s)
+
+    def of_matrix(self, M: Any) -> np.ndarray:
+        return to_quaternion(M)
+
+    def parse(self, value: Any) -> np.ndarray:
+        """A rotation matrix, a quaternion (4 numbers) or any form of :func:`from_spec` ->
+        unit quaternion with w >= 0."""
+        if isinstance(value, (str, dict)):
+            return to_quaternion(from_spec(value))
+        M = np.asarray(value, dtype=float)
+        if M.shape == (4,):
+            return to_quaternion(from_quaternion(M))
+        return to_quaternion(from_matrix(M))
+
+    def paths(self, delta: Array, N: int, side: Side) -> Steps:
+        """Constant steps ``exp(w/N)``: the short geodesic ``w = log(delta)`` and the long way
+        round about the same axis (about x when delta = 1). Each lands on delta exactly,
+        on either side (the steps commute)."""
+        v = quat_log(delta)
+        angle = ca.norm_2(v)
+        turns = angle > 1e-9
+        axis = ca.if_else(turns, v / safe_if(turns, angle, 1.0), ca.DM([1.0, 0.0, 0.0]))
+        return [(name, [quat_exp(w / N)])
+                for name, w in (("geodesic", v), ("long way round", axis * (angle - 2 * np.pi)))]
+
+
+@dual
+def inverse(R: Array) -> Array:
+    """R^{-1} = R^T."""
+    return R.T
+
+
+class _SO3(MatrixGroup):
+    """The rotation group; elements are 3 x 3 matrices, stored as unit quaternions."""
 
     name = "SO3"
     dim = 3
+    formulas = sys.modules[__name__]
+    form = Quaternion()
 
     def identity(self) -> np.ndarray:
         return np.eye(3)
-
-    def compose(self, a: Array, b: Array) -> Array:
-        return a @ b if not is_symbolic(a, b) else ca.mtimes(a, b)
-
-    def inverse(self, a: Array) -> Array:
-        return a.T
-
-    def exp(self, x: Array) -> Array:
-        return exp(x)
-
-    def log(self, g: Array) -> Array:
-        return log(g)
-
-    def hat(self, x: Array) -> Array:
-        return hat(x)
-
-    def vee(self, X: Array) -> Array:
-        return vee(X)
-
-    def Ad(self, g: Array) -> Array:
-        return Ad(g)
-
-    def ad(self, x: Array) -> Array:
-        return ad(x)
 
     def distance_from_group(self, g: Array) -> float:
         g = np.asarray(to_numpy(g), dtype=float)

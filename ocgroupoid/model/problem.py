@@ -32,7 +32,7 @@ from ..errors import ConfigError, DimensionError
 from ..groupoid.base import Factor
 from ..groupoid.product import Groupoid
 from .mechanics import Mechanics, split
-from .values import check_horizon, check_vector
+from .values import check_horizon, check_vector, number
 
 
 
@@ -54,6 +54,17 @@ class GuessContext:
 
 
 GuessHook = Callable[["Problem", GuessContext], list[tuple[str, np.ndarray]]]
+
+
+@dataclass(frozen=True)
+class Inequality:
+    """``lower <= expr <= upper`` wherever the scheme evaluates its constraints; the bounds
+    are expressions of the parameters (infinite where a side is open)."""
+
+    name: str
+    expr: ca.SX
+    lower: ca.SX
+    upper: ca.SX
 
 
 @dataclass
@@ -90,6 +101,7 @@ class Problem:
         self.name = name
         self.order = order
         self.q = ca.SX.sym("q", groupoid.base_size)
+        self.s = ca.SX.sym("s", groupoid.state_size)  # the node states (costs, bounds)
         self.y = ca.SX.sym("y", groupoid.algebra_dim)
         self.dy = ca.SX.sym("dy", groupoid.algebra_dim)
         self.params: dict[str, Parameter] = {}
@@ -104,6 +116,11 @@ class Problem:
         self.rules: dict[str, Callable[..., ca.SX]] = {}
         self.invariants: list[tuple[str, ca.SX]] = []
         self.final_conditions: list[tuple[str, ca.SX]] = []
+        self.inequalities: list[Inequality] = []
+        self.terminal: ca.SX | None = None
+        self.weights = {"effort": 1.0, "time": 0.0}
+        self.T_free = False
+        self.T_bounds: tuple[float, float] = (0.0, np.inf)
 
     @property
     def end_velocities(self) -> bool:
@@ -151,6 +168,15 @@ class Problem:
             v = overrides.get(p.name, p.value)
             vals.append(np.asarray(check_vector(v, p.symbol.numel(), what=f"parameter {p.name}")))
         return np.concatenate(vals) if vals else np.zeros(0)
+
+    def node_state(self, name: str) -> ca.SX:
+        """The node state ``name`` as users see it (a rotation as its 3 x 3 matrix, a point of
+        S^2 or R^n as a vector), for costs, bounds and terminal costs: a reduced Lagrangian
+        never depends on a group state, but a keep-out cone or a tracking cost may."""
+        i, f = self.groupoid.by_state(name)
+        v = f.shown(self.s[self.groupoid.state_layout.slices[i]])
+        shape = f.shown_shape
+        return ca.reshape(v, shape[1], shape[0]).T if len(shape) == 2 else v
 
     def state(self, name: str) -> ca.SX:
         """Base coordinates of the factor whose node state is ``name`` (e.g. Gamma, theta)."""
@@ -202,6 +228,8 @@ class Problem:
             raise ConfigError("mechanics() builds a second-order problem; use order=2")
         if self.dynamics is not None:
             raise ConfigError("mechanics() was already called for this problem")
+        lagrangian = ca.SX(lagrangian)
+        self._check_symbols(lagrangian, "the Lagrangian", rates=False)  # reduced: no R
         mech = split(self.groupoid, lagrangian, self.q, self.y, self.dy,
                      self._indices(actuated), input_matrix)
         self.dynamics = mech
@@ -212,12 +240,81 @@ class Problem:
         return mech.u
 
     def minimize(self, integrand: ca.SX) -> None:
-        """Set the running cost: ``int integrand dt`` (Ltilde for order 2, l for order 1)."""
+        """Set the running cost: ``int integrand dt`` (Ltilde for order 2, l for order 1); it
+        may depend on the node states (:meth:`node_state`), e.g. to track an attitude."""
         integrand = ca.SX(integrand)
         if integrand.shape != (1, 1):
             raise DimensionError(f"the cost integrand is a scalar, got shape {integrand.shape}")
-        self._check_symbols(integrand, "cost")
+        self._check_symbols(integrand, "cost", states=True)
         self.cost = integrand
+
+    def terminal_cost(self, expr: ca.SX) -> None:
+        """Add a Mayer term ``expr(s_N, y_N)`` on the final node (order 1: ``expr(s_N)``)."""
+        expr = ca.SX(expr)
+        if expr.shape != (1, 1):
+            raise DimensionError(f"a terminal cost is a scalar, got shape {expr.shape}")
+        self._check_symbols(expr, "terminal cost", states=True, rates=False,
+                            velocities=self.end_velocities)
+        self.terminal = expr if self.terminal is None else self.terminal + expr
+
+    def objective(self, effort: float = 1.0, time: float = 0.0) -> None:
+        """Weigh the running cost (effort) against the final time: the NLP minimises
+        ``effort * int cost dt + time * T`` (+ the terminal cost). A time weight needs a free
+        horizon (:meth:`horizon` with ``free=True``)."""
+        self.weights = {"effort": number(effort, "objective.effort"),
+                        "time": number(time, "objective.time")}
+        if self.weights["effort"] < 0 or self.weights["time"] < 0:
+            raise ConfigError(f"objective weights must be >= 0, got {self.weights}")
+
+    def minimize_time(self, effort: float = 0.0) -> None:
+        """Minimum time: ``T + effort * int cost dt`` (effort 0: pure minimum time; a small
+        effort regularises the controls, e.g. ``1 + rho |u|^2``)."""
+        self.objective(effort=effort, time=1.0)
+        if self.cost is None:
+            self.cost = ca.SX(0)
+
+    def bound(self, expr: Any, lower: Any = None, upper: Any = None, name: str | None = None
+              ) -> None:
+        """Impose ``lower <= expr <= upper`` wherever the scheme evaluates its constraints
+        (the nodes for order2, the Gauss points for order4, ...).
+
+        ``expr`` is any expression of q, the node states, y, dy (order 2) and the parameters
+        — a control, a velocity, a position, ``dot(R e1, s)`` for a keep-out cone. ``lower``
+        and ``upper`` are numbers, lists (per component), None (that side open, also per
+        component) or expressions of the parameters (they change without a rebuild).
+        """
+        expr = ca.vec(ca.SX(expr))
+        self._check_symbols(expr, "bound", states=True)
+        n = expr.numel()
+        label = name or f"bound{len(self.inequalities) + 1}"
+        if any(b.name == label for b in self.inequalities):
+            raise ConfigError(f"bound name {label!r} used twice")
+        sides = [self._side(v, n, label, inf) for v, inf in ((lower, -np.inf), (upper, np.inf))]
+        if lower is None and upper is None:
+            raise ConfigError(f"bound {label!r}: give a lower or an upper bound (or both)")
+        self.inequalities.append(Inequality(label, expr, *sides))
+
+    def _side(self, value: Any, n: int, name: str, inf: float) -> ca.SX:
+        """One side of a bound as a column of n parameter expressions (+-inf where open);
+        ``value`` is None, a number, an expression or a list mixing them (per component)."""
+        def one(v: Any) -> ca.SX:
+            if v is None:
+                return ca.SX(inf)
+            if isinstance(v, (ca.SX, ca.MX)):
+                return ca.vec(ca.SX(v))
+            if isinstance(v, (float, np.floating)) and np.isinf(v):
+                return ca.SX(float(v))  # +-inf: that side open
+            return ca.SX(number(v, f"bound {name!r}"))
+
+        parts = value if isinstance(value, (list, tuple, np.ndarray)) else [value]
+        side = ca.vertcat(*[one(v) for v in np.asarray(parts, dtype=object).ravel()]) \
+            if not isinstance(value, (ca.SX, ca.MX)) else one(value)
+        self._check_symbols(side, f"bound {name!r}", params_only=True)
+        if side.numel() == 1 and n > 1:
+            side = ca.repmat(side, n, 1)
+        if side.numel() != n:
+            raise DimensionError(f"bound {name!r}: {side.numel()} bounds for {n} expressions")
+        return side
 
     def subject_to(self, expr: ca.SX, name: str = "c") -> None:
         """Add equality constraints ``expr(q, y[, dy]) = 0`` along the trajectory."""
@@ -266,16 +363,26 @@ class Problem:
         self._check_symbols(expr, "controls")
         self.controls = list(zip(names, ca.vertsplit(expr)))
 
-    def _check_symbols(self, expr: ca.SX, what: str) -> None:
-        allowed = {v.name() for v in ca.symvar(ca.vertcat(self.q, self.y, self.P))}
-        if self.order == 2:
-            allowed |= {v.name() for v in ca.symvar(self.dy)}
-        foreign = [v.name() for v in ca.symvar(expr) if v.name() not in allowed]
+    def _check_symbols(self, expr: ca.SX, what: str, states: bool = False,
+                       rates: bool = True, velocities: bool = True,
+                       params_only: bool = False) -> None:
+        """Refuse symbols that are not this problem's (compared by identity, not by name)."""
+        groups = [("parameters", self.P)]
+        if not params_only:
+            groups.append(("q", self.q))
+            if velocities:
+                groups.append(("y", self.y))
+            if rates and self.order == 2:
+                groups.append(("dy", self.dy))
+            if states:
+                groups.append(("node states", self.s))
+        allowed = ca.vertcat(*[g for _, g in groups])
+        foreign = [v.name() for v in ca.symvar(expr)
+                   if not any(ca.is_equal(v, a) for a in ca.vertsplit(allowed))]
         if foreign:
             raise ConfigError(
-                f"{what} uses symbols {foreign} that are not this problem's q, y"
-                f"{', dy' if self.order == 2 else ''} or parameters"
-            )
+                f"{what} uses symbols {foreign} that are not this problem's "
+                f"{', '.join(n for n, _ in groups)}")
 
     # -- boundary conditions -------------------------------------------------------------
 
@@ -319,9 +426,22 @@ class Problem:
             return None
         return check_vector(value, f.algebra_dim, allow_none=True, what=f"{end}.{name}")
 
-    def horizon(self, T: float) -> None:
-        """Set the default final time T (> 0)."""
+    def horizon(self, T: float, free: bool = False, T_min: float | None = None,
+                T_max: float | None = None) -> None:
+        """Set the final time T (> 0). ``free=True`` makes T a decision variable (T is then its
+        initial guess), within ``[T_min, T_max]`` (seed 001, §6.3: time as a variable of the
+        discrete problem, uniform steps h = T/N or adaptive ones)."""
         self.T = check_horizon(T)
+        self.T_free = bool(free)
+        lo = 0.0 if T_min is None else check_horizon(T_min)
+        hi = np.inf if T_max is None else check_horizon(T_max)
+        if not free and (T_min is not None or T_max is not None):
+            raise ConfigError("T_min and T_max bound a free horizon: call horizon(T, free=True, "
+                              "T_min=..., T_max=...)")
+        if lo > hi or (free and not lo <= self.T <= hi):
+            raise ConfigError(f"the horizon guess T = {self.T} must lie in [T_min, T_max] = "
+                              f"[{lo}, {hi}]")
+        self.T_bounds = (lo, hi)
 
     def guesses(self, hook: "GuessHook") -> None:
         """Register model-specific initial guesses for multi-start.

@@ -1,4 +1,4 @@
-"""The values a problem states — numbers, vectors, rotations, directions — validated once.
+"""The values a problem states — numbers, vectors, rotations, poses, directions — validated once.
 
 Plain validators (:func:`number`, :func:`check_vector`, :func:`check_horizon`) serve the
 Python API; the pydantic types built on them (:data:`Number`, :data:`Rotation`, ...) serve
@@ -14,7 +14,7 @@ import numpy as np
 from pydantic import BaseModel, BeforeValidator, ConfigDict
 
 from ..errors import ConfigError
-from ..lie import so3
+from ..lie import se3, so3
 
 
 def number(v: Any, what: str = "value") -> float:
@@ -102,6 +102,7 @@ def vector(n: int, allow_none: bool = False, positive: bool = False) -> Any:
                                                    positive=positive))]
 
 
+Vector6Free = vector(6, allow_none=True)
 Vector3 = vector(3)
 Vector3Free = vector(3, allow_none=True)
 Vector2 = vector(2)
@@ -109,8 +110,10 @@ Vector2Free = vector(2, allow_none=True)
 Positive3 = vector(3, positive=True)
 Positive2 = vector(2, positive=True)
 Rotation = Annotated[Any, BeforeValidator(so3.from_spec)]
+Pose = Annotated[Any, BeforeValidator(se3.from_spec)]  # an SE(3) element, 4 x 4
 UnitVector3 = Annotated[list, BeforeValidator(unit_vector)]
 
 __all__ = ["number", "positive", "check_vector", "check_horizon", "unit_vector", "Strict",
            "Number", "PositiveNumber", "Horizon", "vector", "Vector3", "Vector3Free",
-           "Vector2", "Vector2Free", "Positive3", "Positive2", "Rotation", "UnitVector3"]
+           "Vector2", "Vector2Free", "Vector6Free", "Positive3", "Positive2", "Rotation", "Pose",
+           "UnitVector3"]

@@ -26,6 +26,9 @@ class Kind(Enum):
     PATH = "Phi_d"  # the discrete constraints Phi_d: their multipliers are the seeds' lambda^k
     FINAL = "final conditions"  # prescribed final states, in the factors' charts
     FINAL_CONDITION = "final conditions (user)"  # Problem.final_condition equations
+    INEQUALITY = "bounds"  # Problem.bound: lower <= expr <= upper at the constraint points
+    MESH = "mesh"  # the steps of a free or adaptive time grid
+    COST = "cost"  # cost terms without constraints (time, terminal)
 
 
 @dataclass
@@ -41,12 +44,16 @@ class Block:
     name: str
     fun: ca.Function
     idx: np.ndarray  # (len(z), ncols) indices into w = [x; p]
-    n_param: int = 0  # trailing entries of z that are parameters in every column
+    n_param: int = 0  # trailing entries of z that are parameters in every column (a hint:
+    # assemble() recounts them from idx, e.g. T is a variable when the horizon is free)
     kind: Kind = Kind.PATH
     rows: list[str] = field(default_factory=list)
     columns: list[str] = field(default_factory=list)
     times: np.ndarray = field(default_factory=lambda: np.zeros(0))
     points: int = 1
+    #: ``lower <= g <= upper`` per row of a column, expressions of the parameters P (None:
+    #: equalities, g = 0)
+    bounds: tuple[ca.SX, ca.SX] | None = None
     g_offset: int = 0
 
     @property
@@ -200,6 +207,9 @@ def assemble(blocks: list[Block], x: ca.MX, p: ca.MX) -> dict[str, ca.Function]:
     the names and signatures ``casadi.nlpsol`` looks up in its function cache.
     """
     nx = x.numel()
+    for b in blocks:  # the trailing entries that point into p in every column
+        in_p = np.all(b.idx >= nx, axis=1)
+        b.n_param = int(np.argmin(in_p[::-1])) if not in_p.all() else len(in_p)
     f, g, inputs = _stage_sums(blocks, ca.vertcat(x, p))
     ng = int(g.numel())
     lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", ng)

@@ -2,11 +2,14 @@
 
 The decision variables are
 
-    x = [the scheme's stage variables | free initial-state components | free V_0 | free V_N],
+    x = [the scheme's stage variables | free initial-state components | free V_0 | free V_N
+         | one local horizon N h per phase (adaptive steps) | T (a free horizon)],
 
 (end velocities exist in second-order problems only), and the runtime parameters
 
-    p = [physical parameters P | initial targets | V_0 | final targets | V_N | T].
+    p = [physical parameters P | initial targets | V_0 | final targets | V_N | T],
+
+where T is the horizon, or the initial guess of a free one.
 
 Every quantity is addressed by integer indices into w: a prescribed boundary component
 points into p, a free one into x, so that stage functions read both alike. Which
@@ -93,7 +96,8 @@ class Layout:
     (module docstring). ``n_stage`` is the number of the scheme's own variables, which come
     first in x; the scheme arranges them itself (:attr:`stage`)."""
 
-    def __init__(self, problem: Problem, masks: Masks, n_stage: int) -> None:
+    def __init__(self, problem: Problem, masks: Masks, n_stage: int, N: int,
+                 phases: tuple[int, ...] = ()) -> None:
         G = problem.groupoid
         ds, dg, nt = G.state_size, G.algebra_dim, G.target_size
         self.masks = masks
@@ -108,6 +112,10 @@ class Layout:
         nx += x_V0.size
         x_VN = nx + np.arange(int(free_VN.sum()))
         nx += x_VN.size
+        x_phases = nx + np.arange(len(phases))
+        nx += x_phases.size
+        x_T = np.array([nx]) if problem.T_free else np.zeros(0, dtype=np.int64)
+        nx += x_T.size
         self.nx = nx
         sizes = dict(zip(PARAMETER_KEYS, (problem.P.numel(), nt, dg, nt, dg, 1)))
         self.p_slices: dict[str, slice] = {}
@@ -131,7 +139,16 @@ class Layout:
         self.V0, self.VN = pw["V0"].copy(), pw["VN"].copy()
         self.V0[free_V0] = x_V0
         self.VN[free_VN] = x_VN
-        self.T, self.P, self.start, self.end = pw["T"], pw["P"], pw["start"], pw["end"]
+        #: the horizon: in x when free (then p's T slot holds its initial guess), else in p
+        self.T = x_T if problem.T_free else pw["T"]
+        self.T_guess = pw["T"]
+        #: adaptive steps: the number of intervals of each phase, and each phase's local
+        #: horizon ``N h`` (uniform steps within a phase, its duration free)
+        self.phases, self.phase_steps = tuple(phases), x_phases
+        #: w-index of each interval's local horizon ``N h_k`` (the stage functions' "T"): the
+        #: horizon itself for uniform steps, its phase's for adaptive ones
+        self.steps = np.repeat(x_phases, phases) if phases else np.full(N, self.T[0])
+        self.P, self.start, self.end = pw["P"], pw["start"], pw["end"]
 
     def gather(self, w: ca.MX, idx: np.ndarray) -> ca.MX:
         """``w[idx]`` shaped like idx (a matrix gathered column-major)."""

@@ -1,7 +1,8 @@
 """The numbers that describe one instance, and the packing that turns them into p.
 
 An instance is written as a vector of *values*: the physical parameters, every boundary
-state once (a rotation as its quaternion, a direction as its unit vector, a point of R^n
+state once (a rotation as its quaternion, a pose as its quaternion and position, a
+direction as its unit vector, a point of R^n
 as its components), the boundary velocities and T. :meth:`ParameterValues.pack_function`
 turns values into the NLP parameters p (quaternions normalised, tangent bases of the
 directions completed: each factor's :meth:`~ocgroupoid.groupoid.base.Factor.pack_target`)
@@ -27,7 +28,7 @@ class ValueBlock:
     """One key of an instance: its numbers and where they go in p."""
 
     key: str  # "inertia", "initial.R", "final.Omega", "T", ...
-    kind: str  # "vector", "rotation", "direction" (the factor's value_kind) or "horizon"
+    kind: str  # "vector", "rotation", "pose", "direction" (a factor's value_kind), "horizon"
     values: slice  # slot in the values vector
     p: slice  # slot in p (a direction's slot also holds its tangent basis)
     prescribed: tuple[bool, ...]  # per number: False = free, the number is ignored

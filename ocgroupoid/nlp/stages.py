@@ -46,3 +46,41 @@ class Stages:
         """All path constraints (Phi or psi) as one column."""
         pb = self.problem
         return ca.vertcat(*[c for _, c in pb.constraints]) if pb.constraints else ca.SX(0, 1)
+
+    @property
+    def inequalities(self) -> ca.SX:
+        """The expressions of every bound, as one column."""
+        pb = self.problem
+        return ca.vertcat(*[b.expr for b in pb.inequalities]) if pb.inequalities \
+            else ca.SX(0, 1)
+
+    @property
+    def inequality_names(self) -> list[str]:
+        """One name per inequality row, e.g. ``torque[2]``."""
+        return [f"{b.name}[{i}]" if b.expr.numel() > 1 else b.name
+                for b in self.problem.inequalities for i in range(b.expr.numel())]
+
+    def inequality_bounds(self, points: int = 1) -> tuple[ca.SX, ca.SX] | None:
+        """Lower and upper bounds of the inequality rows of a column with ``points`` times."""
+        pb = self.problem
+        if not pb.inequalities:
+            return None
+        lo = ca.vertcat(*[b.lower for b in pb.inequalities])
+        hi = ca.vertcat(*[b.upper for b in pb.inequalities])
+        return ca.repmat(lo, points, 1), ca.repmat(hi, points, 1)
+
+    def running_cost(self) -> ca.SX:
+        """The running cost weighted by the objective's effort weight."""
+        pb = self.problem
+        assert pb.cost is not None
+        return pb.weights["effort"] * pb.cost
+
+    def at(self, exprs: list[ca.SX], s: ca.SX, y: ca.SX, dy: ca.SX | None = None
+           ) -> list[ca.SX]:
+        """Expressions of (q, node states, y[, dy]) evaluated at a point with state s."""
+        pb, G = self.problem, self.problem.groupoid
+        old, new = [pb.q, pb.s, pb.y], [G.base(s), s, y]
+        if dy is not None:
+            old.append(pb.dy)
+            new.append(dy)
+        return ca.substitute(exprs, old, new)

@@ -43,6 +43,9 @@ DEFAULT_IPOPT: dict[str, Any] = {
     # Diverging_Iterates; left to run, MUMPS grows its workspace each iteration and one bad
     # start of a multi-start took minutes (heavy top, N=256, "long way" guess)
     "diverging_iterates_tol": 1e8,
+    # bounds hold exactly at the solution (IPOPT relaxes them by 1e-8 by default); equality
+    # constraints are never relaxed, so problems without bounds are unaffected
+    "bound_relax_factor": 0.0,
     "print_level": 0,
     "sb": "yes",
 }
@@ -63,14 +66,25 @@ def nlpsol_options(ipopt: dict[str, Any] | None, fns: dict[str, ca.Function]) ->
     return opts
 
 
+STEPS = ("uniform", "adaptive")
+#: adaptive steps stay within [STEP_RANGE[0], STEP_RANGE[1]] times the uniform step T/N
+STEP_RANGE = (0.1, 10.0)
+
+
 @dataclass(frozen=True)
 class Discretization:
-    """N intervals, a scheme, a retraction for the group factors, a rule for the constraints."""
+    """N intervals, a scheme, a retraction for the group factors, a rule for the constraints,
+    and the steps: uniform h = T/N, or adaptive: ``phases`` (interval counts summing to N),
+    uniform within each phase, the phases' durations free (seed 001, §6.3: time as a variable
+    of the discrete problem). The solver chooses the phases so that phase boundaries — nodes
+    — fall on the switches of the controls (:mod:`ocgroupoid.solve.mesh`)."""
 
     N: int
     retraction: str = "cayley"
     rule: str = DEFAULT_RULE
     scheme: str = DEFAULT_SCHEME
+    steps: str = "uniform"
+    phases: tuple[int, ...] = ()
 
     def __post_init__(self) -> None:
         if not isinstance(self.N, int) or isinstance(self.N, bool) or self.N < 2:
@@ -83,6 +97,11 @@ class Discretization:
         if self.scheme not in SCHEME_NAMES:
             raise ConfigError(f"unknown scheme {self.scheme!r}; choose one of "
                               f"{', '.join(SCHEME_NAMES)}")
+        if self.steps not in STEPS:
+            raise ConfigError(f"steps are {' or '.join(STEPS)}, got {self.steps!r}")
+        if self.phases and (sum(self.phases) != self.N or min(self.phases) < 1):
+            raise ConfigError(f"phases {self.phases} must be positive interval counts summing "
+                              f"to N = {self.N}")
 
 
 @dataclass
@@ -119,7 +138,11 @@ class Transcription:
         self.problem, self.disc, self.N = problem, disc, disc.N
         self.scheme = make_scheme(disc.scheme, problem, disc.N, disc.retraction, disc.rule)
         self.masks = Masks.of(problem.groupoid, problem.end_velocities, problem.start, problem.end)
-        self.layout = Layout(problem, self.masks, self.scheme.n_stage)
+        if disc.steps == "adaptive" and not self.scheme.adaptive_steps:
+            raise ConfigError(
+                f"adaptive steps need a scheme whose stages are intervals; {disc.scheme} for "
+                f"order-{problem.order} problems has node stages: choose scheme order4")
+        self.layout = Layout(problem, self.masks, self.scheme.n_stage, disc.N, disc.phases)
         self.scheme.index(self.layout)
         self.nx, self.np = self.layout.nx, self.layout.np
         self.values = ParameterValues(problem, self.masks, self.layout)
@@ -140,15 +163,41 @@ class Transcription:
         t3 = time.perf_counter()
         self.f_fun = ca.Function("f", [x, p], [fns["f"]])
         self.g_fun = ca.Function("g", [x, p], [fns["g"]])
+        self.bounds_function = self._bounds_function()
         self.build_seconds = time.perf_counter() - t0
         #: where the build time went: stage graphs and layout, derivative assembly, IPOPT setup
         self.build_phases = {"stages": t1 - t0, "assembly": t2 - t1, "nlpsol": t3 - t2}
 
     def _final_blocks(self) -> list[Block]:
-        G, N, lay, sch = self.problem.groupoid, self.N, self.layout, self.scheme
+        pb, G, N, lay, sch = self.problem, self.problem.groupoid, self.N, self.layout, self.scheme
         ds, dg, nt = G.state_size, G.algebra_dim, G.target_size
-        npar = self.problem.P.numel()
+        npar = pb.P.numel()
         out = []
+        if pb.terminal is not None:
+            y = pb.y if pb.end_velocities else ca.SX.zeros(dg)
+            phi = ca.substitute(pb.terminal, ca.vertcat(pb.y, pb.s, pb.q),
+                                ca.vertcat(y, pb.s, G.base(pb.s)))
+            terminal = ca.Function("terminal", [pb.s, pb.y, pb.P], [phi])
+            out.append(Block("terminal", stage_function(
+                "terminal", [ds, dg, npar], lambda s, v, par: (terminal(s, v, par),
+                                                               ca.SX(0, 1))),
+                columns(sch.states[:, N], sch.end_velocity, lay.P, ncols=1), npar, Kind.COST))
+        if lay.phases:
+            lo, hi = STEP_RANGE
+            n = ca.DM(lay.phases)
+            M = len(lay.phases)
+            mesh = stage_function("mesh", [M, 1], lambda t, T: (ca.SX(1, 1), ca.vertcat(
+                ca.dot(n, t) / N - T, t - lo * T, hi * T - t)))
+            out.append(Block("mesh", mesh, columns(lay.phase_steps, lay.T, ncols=1), 0,
+                             Kind.MESH, ["sum of the steps - T"] +
+                             [f"phase {i} step >= {lo} T/N" for i in range(M)] +
+                             [f"phase {i} step <= {hi} T/N" for i in range(M)], [""],
+                             bounds=(ca.SX(ca.DM.zeros(2 * M + 1)),
+                                     ca.SX(ca.vertcat(0, ca.DM.inf(2 * M))))))
+        if pb.weights["time"] > 0:
+            w = pb.weights["time"]
+            out.append(Block("time", stage_function("time", [1], lambda T: (w * T, ca.SX(0, 1))),
+                             columns(lay.T, ncols=1), 0 if pb.T_free else 1, Kind.COST))
         rows = np.concatenate(self.masks.end_state)
         if rows.any():
             keep = np.flatnonzero(rows).tolist()
@@ -170,6 +219,28 @@ class Transcription:
                 columns(sch.states[:, N], sch.end_velocity, lay.P, ncols=1), npar,
                 Kind.FINAL_CONDITION, labels, [""]))
         return out
+
+    def _bounds_function(self) -> ca.Function:
+        """``bounds(p) -> (lbg, ubg, lbx, ubx)``: zero for equality rows, the problem's bounds
+        (expressions of its parameters) for inequality rows; the horizon's bounds when free.
+        IPOPT reads them at every solve: changing a bound never rebuilds the NLP."""
+        pb = self.problem
+        p = ca.SX.sym("p", self.np)
+        P = p[self.layout.p_slices["P"]]
+        lo, hi = [], []
+        for b in self.blocks:
+            if b.bounds is None:
+                lo.append(ca.SX.zeros(b.m * b.ncols))
+                hi.append(ca.SX.zeros(b.m * b.ncols))
+            else:
+                low, up = (ca.substitute(v, pb.P, P) for v in b.bounds)
+                lo.append(ca.repmat(low, b.ncols, 1))
+                hi.append(ca.repmat(up, b.ncols, 1))
+        lbx, ubx = ca.DM.ones(self.nx) * -np.inf, ca.DM.ones(self.nx) * np.inf
+        if pb.T_free:
+            lbx[int(self.layout.T[0])], ubx[int(self.layout.T[0])] = pb.T_bounds
+        return ca.Function("bounds", [p], [ca.vertcat(*lo), ca.vertcat(*hi), lbx, ubx], ["p"],
+                           ["lbg", "ubg", "lbx", "ubx"])
 
     # -- constraint rows ----------------------------------------------------------------
 
@@ -238,7 +309,13 @@ class Transcription:
         return np.asarray(p)[self.layout.p_slices[key]]
 
     def horizon_of(self, p: np.ndarray) -> float:
+        """The horizon of the instance p (for a free horizon: its initial guess)."""
         return float(self.part(p, "T")[0])
+
+    def horizon(self, x: np.ndarray, p: np.ndarray) -> float:
+        """The horizon of a point (solved, when it is free)."""
+        w = np.concatenate([np.asarray(x, dtype=float).ravel(), p])
+        return float(w[self.layout.T][0])
 
     # -- the shared Functions -----------------------------------------------------------
 
@@ -278,9 +355,15 @@ class Transcription:
         """``point(XI, p) -> x``: the NLP point of interval velocities XI (dim y x N)."""
         XI = ca.MX.sym("XI", self.problem.groupoid.algebra_dim, self.N)
         p = ca.MX.sym("p", self.np)
-        w = ca.vertcat(ca.MX.zeros(self.nx), p)  # free initial components start at zero
+        x = ca.MX.zeros(self.nx)  # free initial components start at zero
+        T_guess = p[int(self.layout.T_guess[0] - self.nx)]
+        for i in {*self.layout.T.tolist(), *self.layout.phase_steps.tolist()}:
+            if i < self.nx:  # a free horizon at its guess, adaptive steps uniform
+                x[int(i)] = T_guess
+        w = ca.vertcat(x, p)
         pick = lambda idx: self.layout.gather(w, idx)  # noqa: E731
-        x0 = self.layout.compose(self.scheme.point(XI, pick))
+        grid = [(idx, pick(idx)) for idx in (self.layout.T, self.layout.phase_steps)]
+        x0 = self.layout.compose(self.scheme.point(XI, pick) + grid)
         return ca.Function("point", [XI, p], [x0], ["XI", "p"], ["x"])
 
     @cached_property
@@ -295,13 +378,26 @@ class Transcription:
         x_rec = self.layout.compose([(np.arange(self.nx), x), (self.scheme.states[:, 1:],
                                                                r.states[:, 1:])])
         T = pick(self.layout.T)
+        steps = pick(self.layout.steps[None, :]) / self.N  # 1 x N step sizes
+        nodes = ca.vertcat(0, ca.cumsum(steps.T))  # node times, a column
         s = ca.SX.sym("s", G.state_size)
         shown = ca.Function("shown", [s], [G.shown(s)])
         path, final = self.rows(Kind.PATH), self.rows(Kind.FINAL)
         lam_path = ca.reshape(lam[path.ravel(order="F").tolist()], *path.shape) if path.size \
             else ca.MX(0, 1)
         lam_final = lam[final.ravel().tolist()] if final.size else ca.MX(0, 1)
-        times = lambda frac: T * ca.DM(np.asarray(frac, dtype=float)).T  # noqa: E731
+        def times(frac: np.ndarray) -> ca.MX:
+            """Times of fractions of the horizon on this grid: T frac for uniform steps; with
+            adaptive steps, interval k = floor(frac N) at its own fraction."""
+            frac = np.asarray(frac, dtype=float)
+            if not self.layout.phases:
+                return T * ca.DM(frac).T
+            u = frac * self.N
+            k = np.minimum(np.floor(u), self.N - 1).astype(int).tolist()
+            if not k:
+                return ca.MX(1, 0)
+            return (nodes[k] + ca.DM(u - k) * ca.vec(steps)[k]).T
+
         outs = [x_rec, times(np.arange(self.N + 1) / self.N),
                 shown.map(self.N + 1)(r.states), r.states, times(r.velocity_t), r.velocities,
                 times(r.control_t), r.controls, times(self.path_times()), lam_path, lam_final,
@@ -348,8 +444,9 @@ class Transcription:
         """Run IPOPT from ``guess`` with parameters ``p`` (default: the problem's)."""
         p = self.pack() if p is None else np.asarray(p, dtype=float)
         x0 = self.point(guess, p)
+        lbg, ubg, lbx, ubx = self.bounds_function(p)
         t0 = time.perf_counter()
-        r = self.solver(x0=x0, p=p, lbg=0, ubg=0)
+        r = self.solver(x0=x0, p=p, lbg=lbg, ubg=ubg, lbx=lbx, ubx=ubx)
         seconds = time.perf_counter() - t0
         stats = self.solver.stats()
         status = str(stats["return_status"])

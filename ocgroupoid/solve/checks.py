@@ -1,6 +1,7 @@
 """``ocgroupoid check``: dimensions and boundary conditions of a problem, without solving.
 
-Reports the NLP's size (variables, constraints, degrees of freedom), which boundary values
+Reports the NLP's size (variables, constraints, degrees of freedom: variables minus
+equality rows; inequality rows are counted apart), which boundary values
 are prescribed and which are left free (natural boundary conditions), and tests the
 constraints for redundancy: the Jacobian of all constraints is evaluated at a generic point
 on a small grid (the geodesic guess plus a deterministic perturbation: a constant-velocity
@@ -34,6 +35,7 @@ class CheckReport:
     variables: int
     constraints: dict[str, int]
     degrees_of_freedom: int
+    inequalities: int = 0
     prescribed: list[str] = field(default_factory=list)
     free: list[str] = field(default_factory=list)
     redundant: list[str] = field(default_factory=list)
@@ -64,20 +66,29 @@ def boundary_lists(tr: Transcription) -> tuple[list[str], list[str]]:
     return given, free
 
 
-def redundant_rows(tr: Transcription, tol: float = 1e-9) -> list[str]:
-    """Dependent constraint rows at a generic point, boundary conditions named first.
+def equality_rows(tr: Transcription, p: np.ndarray) -> np.ndarray:
+    """Rows of g with ``lbg == ubg`` (equalities); the others are inequalities (bounds)."""
+    lbg, ubg = (np.array(v).ravel() for v in tr.bounds_function(p)[:2])
+    return np.flatnonzero(lbg == ubg)
 
-    Every vector y with ``J^T y = 0`` is a linear dependency among the rows it touches; for
-    each, the boundary-condition rows involved are reported (or, if none, the first rows).
+
+def redundant_rows(tr: Transcription, tol: float = 1e-9) -> list[str]:
+    """Dependent equality-constraint rows at a generic point, boundary conditions first.
+
+    Every vector y with ``J_E^T y = 0`` (``J_E`` the Jacobian of the equality rows) is a
+    linear dependency among the rows it touches; for each, the boundary-condition rows
+    involved are reported (or, if none, the first rows). Inequality rows are left out: an
+    inactive bound costs LICQ nothing.
     """
     p = tr.pack()
     x = tr.point(perturbed_guesses(geodesic_guesses(tr, p)[0], tr.horizon_of(p), 1)[0], p)
-    J = np.array(ca.DM(tr.solver.get_function("nlp_jac_g")(x, p)[1]))
+    eq = equality_rows(tr, p)
+    J = np.array(ca.DM(tr.solver.get_function("nlp_jac_g")(x, p)[1]))[eq]
     if J.size == 0:
         return []
     U, sv, _ = np.linalg.svd(J, full_matrices=True)
     rank = int(np.sum(sv > tol * max(1.0, sv.max(initial=0.0))))
-    labels = tr.row_labels()
+    labels = [tr.row_labels()[i] for i in eq]
     found: list[str] = []
     for y in U[:, rank:].T:
         rows = np.flatnonzero(np.abs(y) > 1e-8 * np.abs(y).max())
@@ -91,14 +102,17 @@ def redundant_rows(tr: Transcription, tol: float = 1e-9) -> list[str]:
 
 
 def check(problem: Problem, N: int, retraction: str = "cayley", rule: str = DEFAULT_RULE,
-          ipopt: dict[str, Any] | None = None, scheme: str = DEFAULT_SCHEME) -> CheckReport:
+          ipopt: dict[str, Any] | None = None, scheme: str = DEFAULT_SCHEME,
+          steps: str = "uniform") -> CheckReport:
     """Build the NLP at the file's N (dimensions) and at a small N (redundancy test)."""
-    disc = Discretization(N, retraction, rule, scheme)
+    disc = Discretization(N, retraction, rule, scheme, steps)
     tr = Transcription(problem, disc, ipopt)
     blocks: dict[str, int] = {}
     for b in tr.blocks:
         key = "final conditions" if b.kind is Kind.FINAL_CONDITION else b.kind.value
         blocks[key] = blocks.get(key, 0) + b.m * b.ncols
     given, free = boundary_lists(tr)
+    n_eq = len(equality_rows(tr, tr.pack()))
     small = tr if N <= SMALL_N else Transcription(problem, replace(disc, N=SMALL_N), ipopt)
-    return CheckReport(tr.nx, blocks, tr.nx - tr.ng, given, free, redundant_rows(small))
+    return CheckReport(tr.nx, blocks, tr.nx - n_eq, tr.ng - n_eq, given, free,
+                       redundant_rows(small))

@@ -6,8 +6,8 @@
     scheme turns it into the residual of its discrete equations
     (:meth:`~ocgroupoid.nlp.schemes.base.Scheme.euler_lagrange_residual`).
 (b) Distance of every node state from its manifold (|R^T R - I|, ||Gamma| - 1|).
-(c) Boundary residuals (each factor's distance to its target), and the largest constraint
-    residual.
+(c) Boundary residuals (each factor's distance to its target), the largest constraint
+    residual, and for bounds the largest violation and where they are active.
 (d) Replay (:mod:`ocgroupoid.solve.replay`): the reported controls driven through the
     continuous dynamics with SciPy, and the terminal error against the target.
 """
@@ -20,7 +20,8 @@ import casadi as ca
 import numpy as np
 
 from ..nlp.assembly import Kind
-from ..nlp.transcription import Transcription
+from ..nlp.transcription import RawResult, Transcription
+from . import mesh
 from .replay import Replay, terminal_errors
 
 
@@ -64,12 +65,34 @@ def manifold_distance(tr: Transcription, states: np.ndarray) -> dict[str, float]
 
 
 def step_sizes(tr: Transcription, steps: np.ndarray) -> dict[str, float]:
-    """Largest algebra step |a_k| of every velocity whose retraction has a singular step
-    (Cayley at pi, the first-order rule at pi/2): how close a grid comes to it."""
+    """Largest rotation angle of one step (``Retraction.step_norm``: |a_k|, |omega_k| on
+    SE(n)) of every velocity whose retraction has a singular step (Cayley at pi, the
+    first-order rule at pi/2): how close a grid comes to it."""
     G = tr.problem.groupoid
-    return {f.velocity: float(np.max(np.linalg.norm(steps[:, vs], axis=1)))
+    return {f.velocity: float(np.max(ret.step_norm(steps[:, vs])))
             for f, ret, vs in zip(G.factors, tr.scheme.retractions, G.velocity_layout.slices)
             if np.isfinite(ret.step_limit)}
+
+
+def bound_report(tr: Transcription, x: np.ndarray, p: np.ndarray) -> dict[str, Any]:
+    """The largest violation of any bound and, per bound row, at how many of its points it
+    is active (at its lower or upper side)."""
+    rows = tr.rows(Kind.INEQUALITY)
+    if not rows.size:
+        return {}
+    g = np.array(tr.g_fun(x, p)).ravel()
+    lbg, ubg, _, _ = (np.array(v).ravel() for v in tr.bounds_function(p))
+    idx = rows.ravel()
+    violation = float(np.max(np.maximum(0.0, np.maximum(lbg[idx] - g[idx], g[idx] - ubg[idx]))))
+    _, side = mesh.active_sides(tr, RawResult("", x, p, np.zeros(tr.ng), 0.0, "", True, 0, 0.0))
+    names = tr.scheme.stages.inequality_names
+    active = {}
+    for name, row in zip(names, side):
+        sides = {k: int(np.sum(row == v)) for k, v in (("upper", 1), ("lower", -1))}
+        if any(sides.values()):
+            active[name] = {k: n for k, n in sides.items() if n}
+    return {"bound_violation_max": violation, "bounds_active": active,
+            "bound_points": int(side.shape[1])}
 
 
 def diagnose(tr: Transcription, x: np.ndarray, p: np.ndarray, lam_g: np.ndarray,
@@ -93,6 +116,7 @@ def diagnose(tr: Transcription, x: np.ndarray, p: np.ndarray, lam_g: np.ndarray,
         "constraint_residual_max": float(np.max(np.abs(g[path]))) if path.size else 0.0,
         "step_angle_max": step_sizes(tr, out["steps"]),
     }
+    d.update(bound_report(tr, x, p))
     if tr.problem.invariants:
         values = conserved_values(tr, s, out["velocities"], p)
         d["conserved_drift"] = {name: float(np.max(np.abs(C - C[0])))

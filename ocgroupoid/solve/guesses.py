@@ -69,7 +69,7 @@ def interpolate(coarse: Transcription, x: np.ndarray, p: np.ndarray, N: int) -> 
     """A guess on N intervals from a solution on a coarser grid: the mean velocity of each
     coarse interval (its algebra increment over h), linear in time."""
     steps = coarse.readout(x, p)["steps"]
-    T = coarse.horizon_of(p)
+    T = coarse.horizon(x, p)
     xi = steps / (T / coarse.N)
     t_c = (np.arange(coarse.N) + 0.5) * T / coarse.N
     t_f = (np.arange(N) + 0.5) * T / N

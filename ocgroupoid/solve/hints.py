@@ -34,7 +34,7 @@ def hint_for(tr: Transcription, r: RawResult, steps: np.ndarray) -> str:
     parts = [HINTS.get(r.status, "try multistart or continuation")]
     G = tr.problem.groupoid
     for f, ret, vs in zip(G.factors, tr.scheme.retractions, G.velocity_layout.slices):
-        step = float(np.max(np.linalg.norm(steps[:, vs], axis=1)))
+        step = float(np.max(ret.step_norm(steps[:, vs])))
         if step > 0.5 * ret.step_limit:
             parts.append(f"{f.velocity} turns {step:.3g} rad in one step ({ret.name} "
                          f"is singular at {ret.step_limit:.2f}); increase N")

@@ -49,7 +49,7 @@ def make_solution(tr: Transcription, r: RawResult, minima: Sequence[Any],
     diagnostics = diagnose(tr, r.x, r.p, r.lam_g, out, ppoly, replay=replay, solved=r.success)
     diagnostics["reconstruction_residual_nlp"] = recon_nlp
     diagnostics["seconds"] = time.perf_counter() - t0
-    T = tr.horizon_of(r.p)
+    T = tr.horizon(r.x, r.p)
     P = tr.part(r.p, "P")
     params = {name: P[sl].tolist() for name, sl in pb.parameter_slices.items()}
     return Solution(
@@ -57,12 +57,14 @@ def make_solution(tr: Transcription, r: RawResult, minima: Sequence[Any],
         iterations=r.iterations, solve_seconds=r.solve_seconds,
         build_seconds=tr.build_seconds,
         discretization={"scheme": tr.disc.scheme, "retraction": tr.scheme.retraction,
-                        "rule": tr.disc.rule, "order": pb.order, "start": r.label},
+                        "rule": tr.disc.rule, "order": pb.order, "start": r.label,
+                        "steps": tr.disc.steps,
+                        **({"T_range": list(pb.T_bounds)} if pb.T_free else {})},
         parameters=params, t=out["t"], states=states, velocity_t=out["velocity_t"],
         velocities=velocities, controls_t=out["control_t"], controls=out["controls"],
         control_names=[n for n, _ in pb.controls], multipliers=mult, diagnostics=diagnostics,
         minima=[m.__dict__ for m in minima], hint=hint_for(tr, r, out["steps"]), x=r.x, p=r.p,
-        control_ppoly=ppoly,
+        control_ppoly=ppoly, manifolds={f.state: f.manifold for f in G.factors},
     )
 
 

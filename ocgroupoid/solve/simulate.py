@@ -30,7 +30,7 @@ class DiscreteFlow:
         dg, ds = G.algebra_dim, G.state_size
         s, xp, xn, T = ca.SX.sym("s", ds), ca.SX.sym("xp", dg), ca.SX.sym("xn", dg), ca.SX.sym("T")
         u = ca.SX.sym("u", len(pb.controls))
-        _, phi, u_expr = scheme.node(s, xp, xn, T, pb.P)
+        _, phi, u_expr, _ = scheme.node(s, xp, xn, T, pb.P)
         res = ca.vertcat(u_expr - u, phi)
         fun = ca.Function("node_eq", [xn, s, xp, T, u, pb.P], [res])
         self.solve_node = ca.rootfinder("flow", "newton", fun, {"abstol": 1e-14})

@@ -91,6 +91,8 @@ class Solution:
     control_ppoly: dict[str, np.ndarray] = field(default_factory=dict)
     x: np.ndarray = field(default_factory=lambda: np.zeros(0))
     p: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    #: the manifold of every state (``SO(3)``, ``SE(3)``, ``S^2``, ``R^2``, ...)
+    manifolds: dict[str, str] = field(default_factory=dict)
 
     def __repr__(self) -> str:
         return (f"Solution({self.problem!r}, status={self.status!r}, cost={self.cost:.10g}, "
@@ -127,6 +129,7 @@ class Solution:
             "controls": {"t": self.controls_t, "u": self.controls, "names": self.control_names,
                          "ppoly": self.control_ppoly},
             "states": {"t": self.t, **self.states},
+            "manifolds": self.manifolds,
             "velocities": {"t": self.velocity_t, **self.velocities},
             "multipliers": self.multipliers,
             "diagnostics": self.diagnostics,
@@ -168,6 +171,7 @@ class Solution:
             control_ppoly={k: np.array(v, dtype=float) for k, v in
                            ctrl.get("ppoly", {}).items()},
             diagnostics=d.get("diagnostics", {}), minima=d.get("minima", []),
+            manifolds=dict(d.get("manifolds", {})),
             hint=d.get("hint", ""), x=np.array(d.get("nlp", {}).get("x", []), dtype=float),
             p=np.array(d.get("nlp", {}).get("p", []), dtype=float),
         )

@@ -18,6 +18,7 @@ from ..errors import ConfigError
 from ..model.problem import Problem
 from ..nlp.schemes import DEFAULT_RULE, DEFAULT_SCHEME
 from ..nlp.transcription import Discretization, Guess, RawResult, Transcription
+from . import mesh
 from .guesses import geodesic_guesses, interpolate, model_guesses, perturbed_guesses
 from .readout import make_solution
 from .solution import Solution
@@ -65,12 +66,13 @@ class Solver:
 
     def __init__(self, problem: Problem, N: int, retraction: str = "cayley",
                  rule: str = DEFAULT_RULE, ipopt: dict[str, Any] | None = None,
-                 scheme: str = DEFAULT_SCHEME) -> None:
+                 scheme: str = DEFAULT_SCHEME, steps: str = "uniform") -> None:
         self.problem = problem
         self.ipopt = dict(ipopt or {})
-        self.disc = Discretization(N, retraction, rule, scheme)
+        self.disc = Discretization(N, retraction, rule, scheme, steps)
         self.transcription = Transcription(problem, self.disc, self.ipopt)
         self._coarse: dict[int, Transcription] = {}
+        self._phased: dict[tuple[int, ...], Transcription] = {}
 
     def _at(self, N: int) -> Transcription:
         if N == self.disc.N:
@@ -123,18 +125,40 @@ class Solver:
             prev = (tr, best)
         assert prev is not None
         tr, best = prev
+        if self.disc.steps == "adaptive" and best.success:
+            tr, best = self._adapt(tr, best, params, initial, final, progress)
         progress("diagnostics")
         return make_solution(tr, best, distinct_minima(results), replay)
 
+    def _adapt(self, tr: Transcription, r: RawResult, params: dict[str, Any] | None,
+               initial: dict[str, Any] | None, final: dict[str, Any] | None,
+               progress: Progress) -> tuple[Transcription, RawResult]:
+        """Adaptive steps: the phases between the switches of the uniform solution r
+        (:mod:`ocgroupoid.solve.mesh`), their durations solved for; r if nothing switches
+        or the phased solve fails."""
+        phases = mesh.phases(tr, r)
+        if len(phases) < 2:
+            return tr, r
+        progress(f"adaptive steps: phases of {', '.join(map(str, phases))} intervals")
+        if phases not in self._phased:
+            self._phased[phases] = Transcription(self.problem, replace(self.disc, phases=phases),
+                                                 self.ipopt)
+        phased = self._phased[phases]
+        p = phased.pack(params, initial, final, tr.horizon(r.x, r.p))
+        result = phased.solve(interpolate(tr, r.x, r.p, self.disc.N), p)
+        return (phased, result) if result.success else (tr, r)
+
 
 def compile(problem: Problem, N: int = 64, retraction: str = "cayley", rule: str = DEFAULT_RULE,
-            ipopt: dict[str, Any] | None = None, scheme: str = DEFAULT_SCHEME) -> Solver:
-    """Build the NLP of ``problem`` on N intervals once; see :class:`Solver`."""
-    return Solver(problem, N, retraction, rule, ipopt, scheme)
+            ipopt: dict[str, Any] | None = None, scheme: str = DEFAULT_SCHEME,
+            steps: str = "uniform") -> Solver:
+    """Build the NLP of ``problem`` on N intervals once; see :class:`Solver`. ``steps``:
+    ``uniform`` (h = T/N) or ``adaptive`` (one step per interval, summing to T)."""
+    return Solver(problem, N, retraction, rule, ipopt, scheme, steps)
 
 
 def solve(problem: Problem, N: int = 64, retraction: str = "cayley", rule: str = DEFAULT_RULE,
           ipopt: dict[str, Any] | None = None, scheme: str = DEFAULT_SCHEME,
-          **kwargs: Any) -> Solution:
+          steps: str = "uniform", **kwargs: Any) -> Solution:
     """Build and solve in one call; ``kwargs`` go to :meth:`Solver.solve`."""
-    return compile(problem, N, retraction, rule, ipopt, scheme).solve(**kwargs)
+    return compile(problem, N, retraction, rule, ipopt, scheme, steps).solve(**kwargs)

@@ -452,7 +452,8 @@ int ocg_write_json(const ocg_result *r, FILE *out) {
   fprintf(out, ",\n \"success\": %s,\n \"status\": ", r->success ? "true" : "false");
   ocg_json_string(out, ocg_status_name(r));
   fprintf(out, ",\n \"N\": %d,\n \"T\": ", OCG_N);
-  ocg_json_number(out, r->p[OCG_P_T]);
+  v = ocg_output(r, OCG_T, &rows, &one); /* the last node time: the solved horizon */
+  ocg_json_number(out, rows ? v[rows - 1] : r->p[OCG_P_T]);
   fputs(",\n \"cost\": ", out);
   ocg_json_number(out, r->cost);
   fprintf(out, ",\n \"stats\": {\"iterations\": %d, \"solve_seconds\": ", r->iterations);
@@ -489,7 +490,7 @@ int ocg_write_json(const ocg_result *r, FILE *out) {
   ocg_json_coefficients(out, v, rows, cols, (size_t)OCG_NU);
   fputs("}},\n \"states\": ", out);
   ocg_json_fields(out, r, OCG_T, OCG_STATES, ocg_state_fields, OCG_N_STATE_FIELDS);
-  fputs(",\n \"velocities\": ", out);
+  fputs(",\n \"manifolds\": " OCG_MANIFOLDS_JSON ",\n \"velocities\": ", out);
   ocg_json_fields(out, r, OCG_VELOCITY_T, OCG_VELOCITIES, ocg_velocity_fields,
                   OCG_N_VELOCITY_FIELDS);
   fputs(",\n \"multipliers\": {\"t\": ", out);

@@ -70,6 +70,7 @@ class Scheme(ABC):
 
     name: ClassVar[str]
     accuracy: ClassVar[int]  # the order at which costs and trajectories converge
+    adaptive_steps: ClassVar[bool] = False  # whether its stages read per-interval steps
     problem_order: ClassVar[int]  # 2: second-order problems (Ltilde); 1: first-order (l)
     summary: ClassVar[str]
 

@@ -61,9 +61,10 @@ class Node:
         return (self.xi_next - self.xi_prev) / self.h
 
     def substitute(self, expr: ca.SX) -> ca.SX:
-        """Evaluate an expression of (q, y, dy) at this node with the midpoint rule."""
+        """Evaluate an expression of (q, node states, y, dy) at this node (midpoint rule)."""
         pb = self.problem
-        return ca.substitute([expr], [pb.q, pb.y, pb.dy], [self.q, self.y, self.dy])[0]
+        return ca.substitute([expr], [pb.q, pb.s, pb.y, pb.dy],
+                             [self.q, self.s, self.y, self.dy])[0]
 
 
 def stage_function(name: str, sizes: list[int], body: Callable[..., Any]) -> ca.Function:
@@ -199,11 +200,13 @@ class NodeMidpoint(IntervalVelocities):
             phi = ca.vertcat(*[node.substitute(c) for _, c in problem.constraints]) \
                 if problem.constraints else ca.SX(0, 1)
         h = self._h(T)
-        #: ``node(s_k, xi_{k-1}, xi_k, T, P) -> (L_d, Phi_d, u_k)`` at node k
+        #: ``node(s_k, xi_{k-1}, xi_k, T, P) -> (L_d, Phi_d, u_k, H_k)`` at node k (H: the
+        #: bounds' expressions)
         self.node = ca.Function(
             "node", [s, xp, xn, T, problem.P],
-            [h * node.substitute(problem.cost), h * phi, node.substitute(self.stages.controls)],
-            ["s", "xi_prev", "xi_next", "T", "P"], ["L", "Phi", "u"])
+            [h * node.substitute(self.stages.running_cost()), h * phi,
+             node.substitute(self.stages.controls), node.substitute(self.stages.inequalities)],
+            ["s", "xi_prev", "xi_next", "T", "P"], ["L", "Phi", "u", "H"])
 
     def blocks(self) -> list[Block]:
         G, N, lay = self.problem.groupoid, self.N, self.layout
@@ -211,29 +214,35 @@ class NodeMidpoint(IntervalVelocities):
         ds, dg, npar = G.state_size, G.algebra_dim, self.problem.P.numel()
         S, XI, T, P = self.states, self.xi, lay.T, lay.P
 
-        def node(weight: float, ghost: str) -> Any:
+        def node(weight: float, ghost: str, kind: Kind) -> Any:
             def body(s: ca.SX, a: ca.SX, b: ca.SX, t: ca.SX, par: ca.SX) -> Any:
                 xp, xn = {"prev": (2 * a - b, b), "next": (a, 2 * b - a), "": (a, b)}[ghost]
-                L, phi, _ = self.node(s, xp, xn, t, par)
-                return weight * L, phi
+                L, phi, _, H = self.node(s, xp, xn, t, par)
+                return (weight * L, phi) if kind is Kind.PATH else (ca.SX(1, 1), H)
             return body
 
         sizes = [ds, dg, dg, 1, npar]
         names = [n for n, c in self.problem.constraints for _ in range(c.numel())]
-        rows = [names[r] if r < len(names) else f"Phi[{r}]" for r in range(self.node.size1_out(1))]
-        return [
-            self.reconstruction(),
-            Block("node0", stage_function("node0", sizes, node(0.5, "prev")),
-                  columns(S[:, 0], lay.V0, XI[:, 0], T, P, ncols=1), 1 + npar, Kind.PATH,
-                  rows, ["node 0"], np.zeros(1)),
-            Block("node", stage_function("node", sizes, node(1.0, "")),
-                  columns(S[:, 1:N], XI[:, :N - 1], XI[:, 1:], T, P, ncols=N - 1), 1 + npar,
-                  Kind.PATH, rows, [f"node {k}" for k in range(1, N)],
-                  np.arange(1, N) / N),
-            Block("nodeN", stage_function("nodeN", sizes, node(0.5, "next")),
-                  columns(S[:, N], XI[:, N - 1], lay.VN, T, P, ncols=1), 1 + npar, Kind.PATH,
-                  rows, [f"node {N}"], np.ones(1)),
-        ]
+        rows = {Kind.PATH: [names[r] if r < len(names) else f"Phi[{r}]"
+                            for r in range(self.node.size1_out(1))],
+                Kind.INEQUALITY: self.stages.inequality_names}
+        kinds = [Kind.PATH] + ([Kind.INEQUALITY] if self.problem.inequalities else [])
+        stages = (("node0", 0.5, "prev", columns(S[:, 0], lay.V0, XI[:, 0], T, P, ncols=1),
+                   [0]),
+                  ("node", 1.0, "", columns(S[:, 1:N], XI[:, :N - 1], XI[:, 1:], T, P,
+                                            ncols=N - 1), list(range(1, N))),
+                  ("nodeN", 0.5, "next", columns(S[:, N], XI[:, N - 1], lay.VN, T, P, ncols=1),
+                   [N]))
+        blocks = [self.reconstruction()]
+        for kind in kinds:
+            suffix = "" if kind is Kind.PATH else "_bounds"
+            bounds = self.stages.inequality_bounds() if kind is Kind.INEQUALITY else None
+            for name, weight, ghost, idx, nodes in stages:
+                blocks.append(Block(name + suffix, stage_function(
+                    name + suffix, sizes, node(weight, ghost, kind)), idx, 1 + npar, kind,
+                    rows[kind], [f"node {k}" for k in nodes], np.array(nodes) / N,
+                    bounds=bounds))
+        return blocks
 
     def readout(self, pick: Pick) -> Readout:
         """Node velocities ``V_0, (xi_{k-1} + xi_k)/2, V_N`` and node controls."""
@@ -266,32 +275,38 @@ class IntervalMidpoint(IntervalVelocities):
         G = problem.groupoid
         s, xi, T = ca.SX.sym("s", G.state_size), ca.SX.sym("xi", G.algebra_dim), ca.SX.sym("T")
         h = self._h(T)
-        q_mid = G.base(G.step(s, self.retractions, h * xi / 2))
-        sub = ca.substitute([problem.cost, self.stages.constraints, self.stages.controls],
-                            [problem.q, problem.y], [q_mid, xi])
-        #: ``interval(s_k, xi_k, T, P) -> (L_d, phi_d, u_{k+1/2})`` on interval k
+        s_mid = G.step(s, self.retractions, h * xi / 2)
+        sub = self.stages.at([self.stages.running_cost(), self.stages.constraints,
+                              self.stages.controls, self.stages.inequalities], s_mid, xi)
+        #: ``interval(s_k, xi_k, T, P) -> (L_d, phi_d, u_{k+1/2}, H_{k+1/2})`` on interval k
         self.interval = ca.Function("interval", [s, xi, T, problem.P],
-                                    [h * sub[0], h * sub[1], sub[2]],
-                                    ["s", "xi", "T", "P"], ["L", "Phi", "u"])
+                                    [h * sub[0], h * sub[1], sub[2], sub[3]],
+                                    ["s", "xi", "T", "P"], ["L", "Phi", "u", "H"])
 
     def blocks(self) -> list[Block]:
         G, N, lay = self.problem.groupoid, self.N, self.layout
         assert lay is not None
         npar = self.problem.P.numel()
 
-        def body(s: ca.SX, xi: ca.SX, t: ca.SX, par: ca.SX) -> Any:
-            L, phi, _ = self.interval(s, xi, t, par)
-            return L, phi
+        def body(kind: Kind) -> Any:
+            def f(s: ca.SX, xi: ca.SX, t: ca.SX, par: ca.SX) -> Any:
+                L, phi, _, H = self.interval(s, xi, t, par)
+                return (L, phi) if kind is Kind.PATH else (ca.SX(1, 1), H)
+            return f
 
         names = [n for n, c in self.problem.constraints for _ in range(c.numel())]
-        return [
-            self.reconstruction(),
-            Block("interval", stage_function("interval", [G.state_size, G.algebra_dim, 1,
-                                                          npar], body),
-                  columns(self.states[:, :N], self.xi, lay.T, lay.P, ncols=N), 1 + npar,
-                  Kind.PATH, names, [f"interval {k}" for k in range(N)],
-                  (np.arange(N) + 0.5) / N),
-        ]
+        sizes = [G.state_size, G.algebra_dim, 1, npar]
+        idx = columns(self.states[:, :N], self.xi, lay.T, lay.P, ncols=N)
+        cols, times = [f"interval {k}" for k in range(N)], (np.arange(N) + 0.5) / N
+        blocks = [self.reconstruction(),
+                  Block("interval", stage_function("interval", sizes, body(Kind.PATH)), idx,
+                        1 + npar, Kind.PATH, names, cols, times)]
+        if self.problem.inequalities:
+            blocks.append(Block("interval_bounds", stage_function(
+                "interval_bounds", sizes, body(Kind.INEQUALITY)), idx, 1 + npar,
+                Kind.INEQUALITY, self.stages.inequality_names, cols, times,
+                bounds=self.stages.inequality_bounds()))
+        return blocks
 
     def readout(self, pick: Pick) -> Readout:
         """Interval velocities at the midpoints; the midpoint controls extended linearly to

@@ -55,7 +55,13 @@ GAUSS2 = np.array([0.5 - SQRT3 / 6, 0.5 + SQRT3 / 6])  # nodes of the 2-point ru
 GAUSS2_A = np.array([[0.25, 0.25 - SQRT3 / 6], [0.25 + SQRT3 / 6, 0.25]])  # its RK matrix
 GAUSS3 = np.array([0.5 - SQRT15 / 10, 0.5, 0.5 + SQRT15 / 10])
 GAUSS3_W = np.array([5.0, 8.0, 5.0]) / 18.0
-SAMPLES = np.array([0.0, 1.0, 2.0, 3.0]) / 3.0  # where a cubic control is sampled per interval
+#: where bounds hold on each interval: both ends and the Gauss points (a control that is
+#: linear on an interval then respects them everywhere; bounding only at the Gauss points
+#: let adaptive steps stretch a linear control beyond its limit between them)
+BOUND_POINTS = np.array([0.0, *GAUSS2, 1.0])
+#: where a cubic control is sampled per interval: the bound points, so that the control a
+#: solution reports equals the bounded one wherever a bound is imposed
+SAMPLES = BOUND_POINTS
 
 
 def quadratic(y0: Any, y1: Any, b: Any, h: Any, tau: float) -> tuple[Any, Any]:
@@ -68,19 +74,52 @@ def quadratic(y0: Any, y1: Any, b: Any, h: Any, tau: float) -> tuple[Any, Any]:
 def cubic_coefficients(samples: Any, h: Any) -> Any:
     """PPoly coefficients (highest power first, in t - t_k) of the cubics through samples
     at :data:`SAMPLES` of each interval: rows ``power * m + component``, one column per
-    interval, for samples given as 4 blocks of m rows."""
+    interval, for samples given as 4 blocks of m rows and steps h (1 x N)."""
     V_inv = np.linalg.inv(np.vander(SAMPLES, 4, increasing=True))  # alpha_j of tau^j
     m = samples.size1() // 4
+    H = ca.repmat(h, m, 1)
     blocks = [samples[i * m:(i + 1) * m, :] for i in range(4)]
     alpha = [sum(float(V_inv[j, i]) * blocks[i] for i in range(4)) for j in range(4)]
-    return ca.vertcat(*[alpha[j] / h**j for j in (3, 2, 1, 0)])
+    return ca.vertcat(*[alpha[j] / H**j for j in (3, 2, 1, 0)])
 
 
 def linear_coefficients(u0: Any, u1: Any, t0: float, t1: float, h: Any) -> Any:
     """PPoly coefficients of the lines through u0 at t_k + t0 h and u1 at t_k + t1 h, in
-    t - t_k (rows: slope block, then value block)."""
-    slope = (u1 - u0) / ((t1 - t0) * h)
-    return ca.vertcat(slope, u0 - slope * t0 * h)
+    t - t_k (rows: slope block, then value block), for steps h (1 x N)."""
+    H = ca.repmat(h, u0.size1(), 1)
+    slope = (u1 - u0) / ((t1 - t0) * H)
+    return ca.vertcat(slope, u0 - slope * t0 * H)
+
+
+def local_horizons(scheme: Scheme, pick: Pick) -> ca.MX:
+    """Each interval's local horizon N h_k (1 x N): T for uniform steps."""
+    assert scheme.layout is not None
+    return pick(scheme.layout.steps[None, :])
+
+
+def gauss_blocks(scheme: Scheme, sizes: list[int], idx: np.ndarray, point: str,
+                 split: Any = None) -> list[Block]:
+    """The path block (cost and Phi_d at the two Gauss points of every interval) and, with
+    bounds, the inequality block of an order4 scheme whose ``interval`` Function returns
+    ``(L, Phi, H)``; ``split`` maps the stage inputs to the Function's arguments."""
+    N, pb = scheme.N, scheme.problem
+    npar = pb.P.numel()
+    names = [n for n, c in pb.constraints for _ in range(c.numel())]
+    times = ((np.arange(N)[:, None] + GAUSS2[None, :]) / N).ravel()
+    cols = [f"interval {k}" for k in range(N)]
+    call = (lambda *z: scheme.interval(*split(*z))) if split else scheme.interval  # noqa: E731
+    blocks = [Block("interval", stage_function("interval", sizes, lambda *z: tuple(
+        call(*z)[:2])), idx, 1 + npar, Kind.PATH,
+        [f"{n} ({point} {j + 1})" for j in range(2) for n in names], cols, times, points=2)]
+    if pb.inequalities:
+        where = ["start", f"{point} 1", f"{point} 2", "end"]
+        blocks.append(Block("interval_bounds", stage_function(
+            "interval_bounds", sizes, lambda *z: (ca.SX(1, 1), call(*z)[2])), idx, 1 + npar,
+            Kind.INEQUALITY, [f"{n} ({w})" for w in where
+                              for n in scheme.stages.inequality_names], cols,
+            ((np.arange(N)[:, None] + BOUND_POINTS[None, :]) / N).ravel(), points=4,
+            bounds=scheme.stages.inequality_bounds(points=4)))
+    return blocks
 
 
 def _check_rule(problem: Problem, rule: str) -> None:
@@ -98,6 +137,7 @@ class QuadraticGauss(Scheme):
     name = "order4"
     accuracy = 4
     problem_order = 2
+    adaptive_steps = True
     summary = ("piecewise-quadratic velocity, 3-point Gauss cost, Phi at the 2 Gauss points "
                "(Gauss-Legendre collocation), 4th-order Magnus step with exp")
 
@@ -127,18 +167,20 @@ class QuadraticGauss(Scheme):
 
         def at(expr: ca.SX, tau: float) -> ca.SX:
             y, dy = quadratic(y0, y1, b, h, tau)
-            q = G.base(G.step(s, self.retractions, theta(tau)))
-            return ca.substitute([expr], [pb.q, pb.y, pb.dy], [q, y, dy])[0]
+            return self.stages.at([expr], G.step(s, self.retractions, theta(tau)), y, dy)[0]
 
         args = [s, y0, y1, b, T, pb.P]
         names = ["s", "y0", "y1", "b", "T", "P"]
-        L = h * sum(float(w) * at(pb.cost, float(c)) for c, w in zip(GAUSS3, GAUSS3_W))
-        phi = self.stages.constraints
+        cost = self.stages.running_cost()
+        L = h * sum(float(w) * at(cost, float(c)) for c, w in zip(GAUSS3, GAUSS3_W))
+        phi, ineq = self.stages.constraints, self.stages.inequalities
         Phi = ca.vertcat(*[h / 2 * at(phi, float(c)) for c in GAUSS2]) if phi.numel() \
             else ca.SX(0, 1)
-        #: ``interval(s_k, y_k, y_{k+1}, b_k, T, P) -> (L_d, Phi_d)``: Phi_d stacks the two
-        #: Gauss points
-        self.interval = ca.Function("interval", args, [L, Phi], names, ["L", "Phi"])
+        H = ca.vertcat(*[at(ineq, float(c)) for c in BOUND_POINTS]) if ineq.numel() \
+            else ca.SX(0, 1)
+        #: ``interval(s_k, y_k, y_{k+1}, b_k, T, P) -> (L_d, Phi_d, H)``: Phi_d stacks the two
+        #: Gauss points, the bounds' expressions H the :data:`BOUND_POINTS`
+        self.interval = ca.Function("interval", args, [L, Phi, H], names, ["L", "Phi", "H"])
         #: ``increment(y_k, y_{k+1}, b_k, T) -> W_k``, exponential coordinates of the step
         self.increment = ca.Function("increment", [y0, y1, b, T], [step],
                                      ["y0", "y1", "b", "T"], ["Theta"])
@@ -181,26 +223,19 @@ class QuadraticGauss(Scheme):
         recon = stage_function("recon", [ds, dg, dg, dg, ds, 1], lambda s, y0, y1, b, s1, T: (
             ca.SX(1, 1), s1 - step(s, inc(y0, y1, b, T))))
         comps = [f"{f.state}[{j}]" for f in G.factors for j in range(f.state_size)]
-        names = [n for n, c in self.problem.constraints for _ in range(c.numel())]
-        interval = stage_function("interval", [ds, dg, dg, dg, 1, npar],
-                                  lambda *z: tuple(self.interval(*z)))
         cols = [self.states[:, :N], self.Y[:, :N], self.Y[:, 1:], self.B]
-        return [
-            Block("recon", recon, columns(*cols, self.states[:, 1:], lay.T, ncols=N), 1,
-                  Kind.RECONSTRUCTION, rows=[f"reconstruction {c}" for c in comps],
-                  columns=[f"interval {k}" for k in range(N)]),
-            Block("interval", interval, columns(*cols, lay.T, lay.P, ncols=N), 1 + npar,
-                  Kind.PATH, [f"{n} (Gauss point {j + 1})" for j in range(2) for n in names],
-                  [f"interval {k}" for k in range(N)],
-                  ((np.arange(N)[:, None] + GAUSS2[None, :]) / N).ravel(), points=2),
-        ]
+        steps = lay.steps[None, :]
+        blocks = [Block("recon", recon, columns(*cols, self.states[:, 1:], steps, ncols=N), 1,
+                        Kind.RECONSTRUCTION, rows=[f"reconstruction {c}" for c in comps],
+                        columns=[f"interval {k}" for k in range(N)])]
+        return blocks + gauss_blocks(self, [ds, dg, dg, dg, 1, npar],
+                                     columns(*cols, steps, lay.P, ncols=N), "Gauss point")
 
     def _increments(self, Y: ca.MX, B: ca.MX, T: ca.MX) -> ca.MX:
         return self.increment.map(self.N)(Y[:, :-1], Y[:, 1:], B, T)
 
     def readout_steps(self, pick: Pick) -> ca.MX:
-        assert self.layout is not None
-        return self._increments(pick(self.Y), pick(self.B), pick(self.layout.T))
+        return self._increments(pick(self.Y), pick(self.B), local_horizons(self, pick))
 
     def point(self, XI: ca.MX, pick: Pick) -> list[tuple[np.ndarray, ca.MX]]:
         """Node velocities: the mean of the adjacent interval velocities (prescribed ends
@@ -215,7 +250,8 @@ class QuadraticGauss(Scheme):
                                           (lay.VN, Y[:, N], pick(lay.VN)))]
         Y = ca.horzcat(ends[0], Y[:, 1:N], ends[1])
         B = 1.5 * (XI - (Y[:, :-1] + Y[:, 1:]) / 2)  # mean = (y_k + y_{k+1})/2 + 2 b_k/3
-        S = self.stages.step.mapaccum(N)(pick(lay.s0), self._increments(Y, B, pick(lay.T)))
+        S = self.stages.step.mapaccum(N)(pick(lay.s0), self._increments(
+            Y, B, local_horizons(self, pick)))
         return [(self.Y, Y), (self.B, B), (self.states[:, 1:], S)]
 
     def readout(self, pick: Pick) -> Readout:
@@ -223,7 +259,7 @@ class QuadraticGauss(Scheme):
         cubics through them (one per interval: the controls jump with the rates at nodes)."""
         lay, N = self.layout, self.N
         assert lay is not None
-        T, P = pick(lay.T), pick(lay.P)
+        T, P = local_horizons(self, pick), pick(lay.P)
         Y, B = pick(self.Y), pick(self.B)
         steps = self._increments(Y, B, T)
         S = ca.horzcat(pick(lay.s0), self.stages.step.mapaccum(N)(pick(lay.s0), steps))
@@ -256,6 +292,7 @@ class GaussStages(Scheme):
     name = "order4"
     accuracy = 4
     problem_order = 1
+    adaptive_steps = True
     summary = ("seed 003 §5.4: Runge-Kutta discrete Lagrangian, 2-stage Gauss, constraints "
                "at the stages")
 
@@ -272,14 +309,22 @@ class GaussStages(Scheme):
         eta = (e1, e2)
         xi = [h * (float(GAUSS2_A[i, 0]) * e1 + float(GAUSS2_A[i, 1]) * e2) for i in range(2)]
         y = [G.velocity_of_rate(self.retractions, xi[i], eta[i]) for i in range(2)]
-        q = [G.base(G.step(s, self.retractions, xi[i])) for i in range(2)]
-        sub = [ca.substitute([pb.cost, self.stages.constraints, self.stages.controls],
-                             [pb.q, pb.y], [q[i], y[i]]) for i in range(2)]
+        sub = [self.stages.at([self.stages.running_cost(), self.stages.constraints,
+                               self.stages.controls, self.stages.inequalities],
+                              G.step(s, self.retractions, xi[i]), y[i]) for i in range(2)]
+        # the ends of the interval, for the bounds: the collocation polynomial's rate (linear
+        # through the stage rates) at tau = 0 and 1
+        rate = [e1 + (e2 - e1) * (c - GAUSS2[0]) / (GAUSS2[1] - GAUSS2[0]) for c in (0.0, 1.0)]
+        Theta = h * (e1 + e2) / 2
+        ends = [self.stages.at([self.stages.inequalities], s, rate[0])[0],
+                self.stages.at([self.stages.inequalities], G.step(s, self.retractions, Theta),
+                               G.velocity_of_rate(self.retractions, Theta, rate[1]))[0]]
         args, names = [s, e1, e2, T, pb.P], ["s", "eta1", "eta2", "T", "P"]
-        #: ``interval(s_k, eta_1, eta_2, T, P) -> (L_d, Phi_d)``, Phi_d at both stages
+        #: ``interval(s_k, eta_1, eta_2, T, P) -> (L_d, Phi_d, H)``: Phi_d at both stages, the
+        #: bounds' expressions H at :data:`BOUND_POINTS`
         self.interval = ca.Function("interval", args, [
-            h / 2 * (sub[0][0] + sub[1][0]), ca.vertcat(h / 2 * sub[0][1], h / 2 * sub[1][1])],
-            names, ["L", "Phi"])
+            h / 2 * (sub[0][0] + sub[1][0]), ca.vertcat(h / 2 * sub[0][1], h / 2 * sub[1][1]),
+            ca.vertcat(ends[0], sub[0][3], sub[1][3], ends[1])], names, ["L", "Phi", "H"])
         #: ``stages(...) -> (y_1, y_2, u_1, u_2)``: velocities and controls at the stages
         self.stage_values = ca.Function("stage_values", args,
                                         [y[0], y[1], sub[0][2], sub[1][2]], names,
@@ -308,34 +353,30 @@ class GaussStages(Scheme):
         recon = stage_function("recon", [ds, 2 * dg, ds, 1], lambda s, e, s1, T: (
             ca.SX(1, 1), s1 - step(s, T / N * (e[:dg] + e[dg:]) / 2)))
         comps = [f"{f.state}[{j}]" for f in G.factors for j in range(f.state_size)]
-        names = [n for n, c in self.problem.constraints for _ in range(c.numel())]
-        interval = stage_function("interval", [ds, dg, dg, 1, npar],
-                                  lambda *z: tuple(self.interval(*z)))
-        return [
-            Block("recon", recon, columns(self.states[:, :N], self.eta, self.states[:, 1:],
-                                          lay.T, ncols=N), 1, Kind.RECONSTRUCTION,
-                  rows=[f"reconstruction {c}" for c in comps],
-                  columns=[f"interval {k}" for k in range(N)]),
-            Block("interval", interval, columns(self.states[:, :N], self.eta, lay.T, lay.P,
-                                                ncols=N), 1 + npar, Kind.PATH,
-                  [f"{n} (stage {j + 1})" for j in range(2) for n in names],
-                  [f"interval {k}" for k in range(N)],
-                  ((np.arange(N)[:, None] + GAUSS2[None, :]) / N).ravel(), points=2),
-        ]
+        steps = lay.steps[None, :]
+        blocks = [Block("recon", recon, columns(self.states[:, :N], self.eta, self.states[:, 1:],
+                                                steps, ncols=N), 1, Kind.RECONSTRUCTION,
+                        rows=[f"reconstruction {c}" for c in comps],
+                        columns=[f"interval {k}" for k in range(N)])]
+        return blocks + gauss_blocks(self, [ds, 2 * dg, 1, npar], columns(
+            self.states[:, :N], self.eta, steps, lay.P, ncols=N), "stage",
+            split=lambda s, e, T, P: (s, e[:dg], e[dg:], T, P))
 
     def readout_steps(self, pick: Pick) -> ca.MX:
         """``Theta_k = h (eta_1 + eta_2)/2``."""
         assert self.layout is not None
         dg = self.problem.groupoid.algebra_dim
         E = pick(self.eta)
-        return pick(self.layout.T) / self.N * (E[:dg, :] + E[dg:, :]) / 2
+        H = ca.repmat(local_horizons(self, pick) / self.N, dg, 1)
+        return H * (E[:dg, :] + E[dg:, :]) / 2
 
     def point(self, XI: ca.MX, pick: Pick) -> list[tuple[np.ndarray, ca.MX]]:
         """Both stage rates equal to the interval velocity: Theta_k = h xi_k, so the path of
         a guess is the path of the order2 scheme's (a geodesic lands on its target)."""
         lay = self.layout
         assert lay is not None
-        S = self.stages.step.mapaccum(self.N)(pick(lay.s0), pick(lay.T) / self.N * XI)
+        H = ca.repmat(local_horizons(self, pick) / self.N, XI.size1(), 1)
+        S = self.stages.step.mapaccum(self.N)(pick(lay.s0), H * XI)
         return [(self.eta, ca.vertcat(XI, XI)), (self.states[:, 1:], S)]
 
     def readout(self, pick: Pick) -> Readout:
@@ -344,7 +385,7 @@ class GaussStages(Scheme):
         lay, N = self.layout, self.N
         assert lay is not None
         dg = self.problem.groupoid.algebra_dim
-        T, P, E = pick(lay.T), pick(lay.P), pick(self.eta)
+        T, P, E = local_horizons(self, pick), pick(lay.P), pick(self.eta)
         S = ca.horzcat(pick(lay.s0), self.step_over(pick))
         y1, y2, u1, u2 = self.stage_values.map(N)(S[:, :-1], E[:dg, :], E[dg:, :], T, P)
         t = ((np.arange(N)[:, None] + GAUSS2[None, :]) / N).ravel()
