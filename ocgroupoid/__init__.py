@@ -10,6 +10,7 @@ guesses, read-out, diagnostics, solution) -> ``models`` (canonical systems) -> `
 (YAML), ``export`` (C code), ``plotting`` -> ``cli``.
 """
 
+from . import _startup  # noqa: F401  (first: Ctrl-C while the command line starts, one line)
 from . import lie
 from ._version import __version__
 from .errors import (
@@ -27,6 +28,7 @@ from .lie import so3
 from .lie import SE2, SE3, SO3, se2, se3
 from .model import GuessContext, Problem
 from .nlp import Discretization, Guess, Transcription
+from .plotting import plot  # registers Solution.plot; matplotlib loads on use
 from .solve import Solution, Solver, compile, solve
 from .sweep import sweep  # Dask, pandas and pyarrow are imported when a sweep runs
 
@@ -35,5 +37,5 @@ __all__ = [
     "SphereAction", "Discretization", "Transcription", "Guess", "Solver", "compile", "solve",
     "Solution", "OcgError", "ConfigError", "DimensionError", "SingularityError",
     "BoundaryError", "TranscriptionError", "SolverError", "export_c", "sweep", "__version__",
-    "SO3", "SE3", "SE2", "se3", "se2",
+    "SO3", "SE3", "SE2", "se3", "se2", "plot",
 ]

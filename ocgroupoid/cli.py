@@ -7,6 +7,7 @@ the fix, never a traceback).
 
 from __future__ import annotations
 
+import os
 import sys
 import time
 from contextlib import nullcontext
@@ -17,7 +18,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from .errors import OcgError
+from .errors import ConfigError, OcgError
 
 app = typer.Typer(no_args_is_help=True, add_completion=False, pretty_exceptions_enable=False,
                   help="Optimal control on Lie groups and groupoids: solve YAML problem files.")
@@ -28,8 +29,11 @@ SET_HELP = "Override any key: KEY=VALUE, the value read as YAML (e.g. horizon.N=
 
 
 def fail(message: str, code: int = 2) -> None:
-    """Print an error (no traceback) and exit."""
-    err.print(f"[bold red]error:[/] {message}", highlight=False, markup=True)
+    """Print an error (no traceback) and exit; the message is plain text (its brackets,
+    such as ``[w, x, y, z]``, are not rich markup)."""
+    from rich.markup import escape
+
+    err.print(f"[bold red]error:[/] {escape(message)}", highlight=False, markup=True)
     raise typer.Exit(code)
 
 
@@ -41,7 +45,8 @@ def summary(sol: Any) -> Table:
                     f"{disc.get('retraction')}, rule {disc.get('rule')})", show_header=False)
     t.add_column(style="bold")
     t.add_column()
-    t.add_row("status", f"[{'green' if sol.success else 'red'}]{sol.status}[/]")
+    t.add_row("status", f"[{'green' if sol.success else 'red'}]{sol.status}[/]"
+              + ("" if sol.success or sol.status != "Solve_Succeeded" else " (not verified)"))
     t.add_row("cost", f"{sol.cost:.12g}")
     t.add_row("iterations", str(sol.iterations))
     if "T_range" in disc:
@@ -49,7 +54,9 @@ def summary(sol: Any) -> Table:
         t.add_row("final time (free)", f"{sol.T:.10g} in [{lo:g}, {hi:g}]"
                   + (f", {disc['steps']} steps" if disc.get("steps") == "adaptive" else ""))
     t.add_row("build time", f"{sol.build_seconds * 1e3:.1f} ms")
-    t.add_row("solve time", f"{sol.solve_seconds * 1e3:.1f} ms")
+    t.add_row("IPOPT time, best start", f"{sol.solve_seconds * 1e3:.1f} ms")
+    if sol.starts > 1:
+        t.add_row(f"IPOPT time, all {sol.starts} starts", f"{sol.ipopt_seconds_total * 1e3:.1f} ms")
     t.add_row("EL residual (max over nodes)", f"{d['euler_lagrange_residual_max']:.2e}")
     t.add_row("distance from manifold",
               ", ".join(f"{k} {v:.1e}" for k, v in d["manifold_distance"].items()))
@@ -92,8 +99,9 @@ def solve(
 
     try:
         cfg = files.load(file, set_)
-        problem = files.build(cfg)
         f = cfg.file
+        target, picture = _solve_outputs(out_path, plot_path, f.output)
+        problem = files.build(cfg)
         d = f.discretization
         t0 = time.perf_counter()
         with _status("building the NLP...", quiet):
@@ -103,23 +111,52 @@ def solve(
             sol = solver.solve(multistart=f.solver.multistart,
                                continuation=f.solver.continuation or None,
                                progress=status.update if status is not None else _silent)
-        target = out_path or (Path(f.output.file) if f.output.file else None)
         if target is not None:
             sol.to_json(target)
-        picture = plot_path or (Path(f.output.plot) if f.output.plot else None)
         if picture is not None:
-            from .plotting import plot_solution
-            plot_solution(sol, picture)
+            from .plotting import plot as plot_figure
+            plot_figure(sol, picture)
     except OcgError as e:
         fail(str(e))
         return
+    except OSError as e:  # checked before the solve, yet the disk may fill or a folder go
+        fail(f"writing {e.filename or target}: {e.strerror or e}; free space or choose "
+             "another --out/--plot")
+        return
     if not quiet:
         out.print(summary(sol))
-        out.print(f"total {time.perf_counter() - t0:.2f} s"
+        out.print(f"total {time.perf_counter() - t0:.2f} s (build, {sol.starts} IPOPT "
+                  f"start{'s' if sol.starts > 1 else ''}, diagnostics)"
                   + (f"; solution written to {target}" if target else ""))
+    from rich.markup import escape
+    if sol.status == "interrupted":
+        err.print("[bold red]interrupted:[/] the best point so far is "
+                  + (f"in {target} " if target else "") + "with success: false")
+        raise typer.Exit(130)
     if not sol.success:
-        err.print(f"[bold red]solver failed:[/] {sol.status}. {sol.hint}")
+        what = "not verified" if sol.status == "Solve_Succeeded" else f"solver failed: {sol.status}"
+        err.print(f"[bold red]{what}:[/] {escape(sol.hint)}")
         raise typer.Exit(1)
+
+
+def _solve_outputs(out_path: Optional[Path], plot_path: Optional[Path],
+                   section: Any) -> tuple[Optional[Path], Optional[Path]]:
+    """The solution and figure paths of `solve` (options first, then the file's ``output``
+    section), checked before anything is built: ConfigError naming the option and the fix."""
+    from .solve.outputs import check_file
+
+    target = picture = None
+    if out_path is not None or section.file:
+        target = check_file(out_path if out_path is not None else section.file,
+                            "--out" if out_path is not None else "output.file")
+    if plot_path is not None or section.plot:
+        picture = check_file(plot_path if plot_path is not None else section.plot,
+                             "--plot" if plot_path is not None else "output.plot",
+                             "solution.png")
+    if target is not None and picture is not None and target.resolve() == picture.resolve():
+        raise ConfigError(f"--out and --plot are the same file {target}: the figure would "
+                          "replace the solution; give two paths")
+    return target, picture
 
 
 @app.command()
@@ -138,13 +175,16 @@ def check(
         cfg = files.load(file, set_)
         f = cfg.file
         d = f.discretization
-        report = run_check(files.build(cfg), f.horizon.N, d.retraction, d.rule, f.solver.ipopt,
+        problem = files.build(cfg)
+        report = run_check(problem, f.horizon.N, d.retraction, d.rule, f.solver.ipopt,
                            d.scheme, d.steps)
     except OcgError as e:
         fail(str(e))
         return
+    # a retraction acts on group factors only: on R^n every retraction is the translation
+    retraction = f", {d.retraction}" if _has_group_factor(problem) else ""
     t = Table(title=f"{cfg.name}: model {f.model}, N={f.horizon.N}, T={f.horizon.T}, "
-                    f"{d.scheme}, {d.retraction}", show_header=False)
+                    f"{d.scheme}{retraction}", show_header=False)
     t.add_column(style="bold")
     t.add_column()
     t.add_row("variables", str(report.variables))
@@ -161,17 +201,26 @@ def check(
              + "; ".join(report.redundant) + ". Remove or free the boundary condition named.")
 
 
+def _has_group_factor(problem: Any) -> bool:
+    """Whether a factor of the problem moves on a group other than R^n (where the choice of
+    retraction matters)."""
+    from .lie.rn import Rn
+
+    return any(not isinstance(f.group, Rn) for f in problem.groupoid.factors)
+
+
 @app.command()
 def plot(
     solution: Path = typer.Argument(..., help="solution JSON written by `solve --out`, or "
                                     "a sweep's folder (`sweep --out`)"),
     out_path: Path = typer.Option(..., "--out", help="PNG file to write"),
 ) -> None:
-    """Plot states, velocities, controls and multipliers; attitudes as body axes on the sphere.
-    Given a sweep's folder (`sweep --out DIR`), plot cost and status against the swept keys."""
+    """Plot a solution as `solve --plot` does (`og.plot`): every quantity with its unit, the
+    attitude error to the target, x-y paths, bounds and targets. Given a sweep's folder
+    (`sweep --out DIR`), plot cost and status against the swept keys."""
     import json
 
-    from .plotting import plot_solution
+    from .plotting import plot as plot_figure
     from .solve.solution import Solution
 
     if solution.is_dir():
@@ -190,7 +239,7 @@ def plot(
         fail(f"{solution}: not a solution file ({type(e).__name__}: {e}); give the JSON "
              "written by `ocgroupoid solve --out`")
         return
-    plot_solution(sol, out_path)
+    plot_figure(sol, out_path)
     out.print(f"figure written to {out_path}")
 
 
@@ -206,6 +255,7 @@ def list_models() -> None:
     t.add_column("what it is")
     for name, spec in sorted(MODELS.items()):
         t.add_row(name, spec.summary)
+    t.add_row("custom", CUSTOM_SUMMARY)
     out.print(t)
     t = Table(title="schemes (discretization.scheme)")
     t.add_column("scheme")
@@ -217,10 +267,38 @@ def list_models() -> None:
             t.add_row(name, str(cls.accuracy), f"order-{problem_order}", cls.summary)
     out.print(t)
     out.print("retractions (discretization.retraction): " + ", ".join(RETRACTION_NAMES))
-    folder = Path.cwd() / "problems"
-    if folder.is_dir():
-        files = sorted(folder.glob("*.yaml"))
-        out.print("problems/: " + (", ".join(p.name for p in files) if files else "(none)"))
+    folders = problem_folders()
+    for folder in folders:
+        names = ", ".join(p.name for p in sorted(folder.glob("*.yaml")))
+        out.print(f"problem files in {folder}: {names}", highlight=False, soft_wrap=True)
+    if not folders:
+        out.print("no problem files found (looked in ./problems and next to the package)")
+
+
+CUSTOM_SUMMARY = ("your own model, written in the problem file: a definition section (groupoid "
+                  "factors, Lagrangian or controls, cost); e.g. custom_rigid_body.yaml")
+
+
+def problem_folders() -> list[Path]:
+    """The folders of problem files `list` shows, from any working directory: ./problems,
+    the problems/ of a source checkout holding this package, and the copy installed under
+    PREFIX/share/ocgroupoid/problems (pyproject.toml's data-files)."""
+    import sysconfig
+
+    here = Path(__file__).resolve().parent
+    candidates = [Path.cwd() / "problems", here.parent / "problems"]
+    for scheme in (sysconfig.get_default_scheme(), f"{os.name}_user"):
+        try:
+            candidates.append(Path(sysconfig.get_path("data", scheme)) / "share" / "ocgroupoid"
+                              / "problems")
+        except KeyError:
+            continue
+    found: list[Path] = []
+    for folder in candidates:
+        if folder.is_dir() and any(folder.glob("*.yaml")) and \
+                all(folder.resolve() != f.resolve() for f in found):
+            found.append(folder)
+    return found
 
 
 def _status(message: str, quiet: bool) -> Any:
@@ -239,19 +317,24 @@ def export_c_command(
     build: bool = typer.Option(False, "--build", help="run make right after exporting"),
     set_: list[str] = typer.Option([], "--set", help=SET_HELP),
     cflags: str = typer.Option("", "--cflags", help="extra CFLAGS for --build"),
+    force: bool = typer.Option(False, "--force", help="write into --out even if it holds "
+                               "files export-c did not write (they are overwritten)"),
 ) -> None:
     """Export the compiled problem as a C project (IPOPT via CasADi codegen): `make -C OUT`
-    builds OUT/solve, which prints the solution JSON; OUT/README.md tells the rest."""
+    builds OUT/solve, which prints the solution JSON; OUT/README.md tells the rest. Needs a
+    C compiler and make to build. OUT must be new, empty or an earlier export (--force)."""
     from . import files
-    from .export import export_c, make
+    from .export import claim_folder, export_c, make, positive_parameters
 
     try:
         cfg = files.load(file, set_)
+        claim_folder(out_dir, force, "--out")
         f = cfg.file
         d = f.discretization
         with _status("exporting C code...", False):
             done = export_c(files.build(cfg), out_dir, f.horizon.N, d.retraction, d.rule,
-                            f.solver.ipopt, scheme=d.scheme, steps=d.steps)
+                            f.solver.ipopt, scheme=d.scheme, steps=d.steps, force=force,
+                            positive=positive_parameters(cfg.spec.parameters))
         if build:
             with _status("building with make...", False):
                 binary = make(done.folder, cflags)
@@ -294,10 +377,12 @@ def sweep(
 ) -> None:
     """Solve a problem file at every point of a grid or random samples of --set overrides, on
     Dask; one row per point in OUT/table.parquet. Exit 1 if any point failed."""
+    from .solve.outputs import check_folder
     from .sweep import sweep as run_sweep
     from .sweep.progress import progress_bar, summary
 
     try:
+        check_folder(out_dir, "--out")
         with progress_bar(err, quiet) as bar:
             df = run_sweep(file, grid, random=random, samples=samples, seed=seed,
                            overrides=set_, out=out_dir, scheduler=scheduler, workers=workers,
@@ -317,8 +402,15 @@ def sweep(
 
 
 def main() -> None:
-    """Entry point of the ``ocgroupoid`` command."""
-    app()
+    """Entry point of the ``ocgroupoid`` command (Ctrl-C: one line, exit 130)."""
+    from ._startup import release
+
+    release()  # from here on Ctrl-C is a KeyboardInterrupt the commands handle
+    try:
+        app()
+    except KeyboardInterrupt:
+        err.print("interrupted", highlight=False)
+        raise SystemExit(130) from None
 
 
 if __name__ == "__main__":  # pragma: no cover

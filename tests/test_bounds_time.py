@@ -36,7 +36,9 @@ def controls(pb: og.Problem) -> ca.SX:
 def minimum_time(T_guess: float = 5.0) -> og.Problem:
     """Rest to rest about the principal axis e3, only its torque actuated (the unactuated
     Euler equations keep Omega_1 = Omega_2 = 0), |u3| <= A, minimum time: a double
-    integrator, bang-bang with one switch at T/2."""
+    integrator, bang-bang with one switch at T/2. Degenerate by design: the linearisation
+    cannot move R or Omega off the e3 rotation, so their final components about e1, e2 are
+    implied (:func:`solved_but_degenerate`)."""
     pb = og.Problem(og.LieGroupFactor(state="R", velocity="Omega"), name="minimum_time")
     I = pb.parameter("inertia", 3, [1.0, 2.0, 3.0])
     Om = pb.velocity("Omega")
@@ -50,6 +52,14 @@ def minimum_time(T_guess: float = 5.0) -> og.Problem:
     return pb
 
 
+def solved_but_degenerate(sol: og.Solution) -> bool:
+    """IPOPT solved and every check of the verdict passed but the rank test: the final
+    conditions about e1, e2 of :func:`minimum_time` are implied (LICQ fails there)."""
+    failures = sol.diagnostics["verdict"]["failures"]
+    return (sol.status == "Solve_Succeeded" and len(failures) >= 1
+            and all("is implied by" in f for f in failures))
+
+
 @pytest.mark.parametrize("scheme", ["order2", "order4"])
 def test_minimum_time_error_falls_with_uniform_steps(scheme: str) -> None:
     """Odd N: no node on the switch at T/2, so T carries an error that falls with N; the
@@ -58,7 +68,7 @@ def test_minimum_time_error_falls_with_uniform_steps(scheme: str) -> None:
     errors = []
     for N in (9, 17, 33, 65):
         sol = og.solve(minimum_time(), N=N, scheme=scheme)
-        assert sol.success, (N, sol.status)
+        assert solved_but_degenerate(sol), (N, sol.status, sol.hint)
         if scheme == "order4":
             assert sol.T >= T_STAR - 1e-8
         errors.append(abs(sol.T - T_STAR))
@@ -72,7 +82,7 @@ def test_minimum_time_error_falls_with_uniform_steps(scheme: str) -> None:
 def test_adaptive_steps_put_a_node_on_the_switch(N: int) -> None:
     """A uniform solve finds the switch; the phased solve moves a node onto it: T exact."""
     sol = og.solve(minimum_time(), N=N, scheme="order4", steps="adaptive")
-    assert sol.success, sol.status
+    assert solved_but_degenerate(sol), (sol.status, sol.hint)
     assert abs(sol.T - T_STAR) <= 1e-6, sol.T
     assert np.min(np.abs(sol.t - T_STAR / 2)) <= 1e-6  # a node at the switch
     u = sol.control(np.linspace(0, sol.T, 4001))

@@ -53,7 +53,8 @@ def test_python_m_solves_the_canonical_problem(tmp_path) -> None:
                         "horizon.N=32", "--out", str(out)], capture_output=True, text=True,
                        cwd=tmp_path)
     assert r.returncode == 0, r.stderr
-    for word in ("Solve_Succeeded", "cost", "iterations", "build time", "solve time",
+    for word in ("Solve_Succeeded", "cost", "iterations", "build time",
+                 "IPOPT time, best start", "IPOPT time, all 5 starts", "5 IPOPT starts",
                  "EL residual", "replay terminal error"):
         assert word in r.stdout
     sol = json.loads(out.read_text())
@@ -85,13 +86,27 @@ def test_infeasible_problem_exits_1_and_writes_failure(tmp_path) -> None:
     f = tmp_path / "infeasible.yaml"
     f.write_text(INFEASIBLE)
     out = tmp_path / "sol.json"
-    r = runner.invoke(app, ["solve", str(f), "--out", str(out)])
+    r = runner.invoke(app, ["solve", str(f), "--out", str(out), "--set",
+                            "solver.multistart=false"])
     assert r.exit_code == 1
     text = " ".join(r.output.split())
     assert "Infeasible_Problem_Detected" in text and "ocgroupoid check" in text
     sol = json.loads(out.read_text())
     assert sol["success"] is False and sol["status"] == "Infeasible_Problem_Detected"
     assert sol["hint"]
+
+
+def test_infeasible_problem_is_not_verified_by_a_perturbed_start(tmp_path) -> None:
+    """Multi-start (the default) meets a zigzag whose midpoints alone stay on the circle: IPOPT
+    solves that discrete artefact, the verdict catches it (exit 1, success false)."""
+    f = tmp_path / "infeasible.yaml"
+    f.write_text(INFEASIBLE)
+    out = tmp_path / "sol.json"
+    r = runner.invoke(app, ["solve", str(f), "--out", str(out)])
+    assert r.exit_code == 1
+    sol = json.loads(out.read_text())
+    assert sol["success"] is False
+    assert "check the final values" in sol["hint"]
 
 
 def test_check_names_a_redundant_boundary_condition(tmp_path) -> None:

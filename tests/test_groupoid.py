@@ -245,7 +245,7 @@ def test_magnus_step_has_local_order_five(f, seed: int) -> None:
     s0, ret = f.sample_state(rng), retraction("exp", f.group)
     g = np.array([0.5 - np.sqrt(3) / 6, 0.5 + np.sqrt(3) / 6])
     errors = []
-    for h in (0.2, 0.1):
+    for h in (0.05, 0.025):  # asymptotic for every seed; at 0.2 some show ratio 16-21
         exact = solve_ivp(lambda t, s: np.asarray(f.state_rate(s, y(t)), dtype=float).ravel(),
                           (0.0, h), s0, method="DOP853", rtol=1e-13, atol=1e-14).y[:, -1]
         W = np.asarray(f.magnus(y(g[0] * h), y(g[1] * h), h), dtype=float).ravel()

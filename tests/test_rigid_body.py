@@ -105,7 +105,7 @@ def test_multistart_finds_the_long_way_round() -> None:
     pb = rigid_body(RT=og.so3.from_axis_angle([0, 0, 1], 2.8), Omega0=[0, 0, -3.0], T=2.0,
                     name="long_way")
     solver = og.compile(pb, N=64)
-    plain = solver.solve(replay=False)
+    plain = solver.solve(multistart=False, replay=False)
     multi = solver.solve(multistart=True, replay=False)
     assert plain.success and multi.success
     assert multi.cost < 0.5 * plain.cost

@@ -24,23 +24,28 @@ C solver starts from the geodesic guess, or from a warm start the caller gives.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import re
 import shutil
 import subprocess
+import tempfile
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any, Collection, Sequence
 
 import casadi as ca
 import numpy as np
 
 from .._version import __version__
 from ..errors import ConfigError, ExportError
+from ..model import values as checks
 from ..model.problem import Problem
 from ..nlp.parameters import ParameterValues
 from ..nlp.schemes import DEFAULT_RULE, DEFAULT_SCHEME
 from ..nlp.transcription import C_READOUT_OUTPUTS, Transcription
+from ..solve.outputs import check_folder, write_atomic
 from ..solve.solver import Solver
 
 TEMPLATES = Path(__file__).resolve().parent / "c_templates"
@@ -61,6 +66,8 @@ GENERATED_PRELUDE = """\
 
 """
 EXPORT_IPOPT = {"print_level": 0, "sb": "yes"}  # stdout carries the JSON, nothing else
+# What export_c wrote (file -> sha256): a folder holding it is one export_c may overwrite.
+MANIFEST = ".ocgroupoid-export.json"
 
 
 # ----------------------------------------------------------------- parameter files
@@ -71,14 +78,15 @@ def params_text(values: ParameterValues, numbers: np.ndarray, header: str = "") 
     lines = [f"# {line}".rstrip() for line in header.splitlines()]
     for b in values.blocks:
         nums = " ".join(f"{x:.17g}" for x in numbers[b.values])
-        lines.append(f"{b.key} {nums}  # {b.meaning}" + (f" ({b.note})" if b.note else ""))
+        lines.append(f"{b.key} {nums}  # {_one_line(b.meaning)}"
+                     + (f" ({b.note})" if b.note else ""))
     return "\n".join(lines) + "\n"
 
 
 def write_params(path: str | Path, tr: Transcription, p: np.ndarray, header: str = "") -> Path:
     """Write the parameter file of the instance p (for ``DIR/solve PATH``)."""
     path = Path(path)
-    path.write_text(params_text(tr.values, tr.values.values_of(p), header))
+    write_atomic(path, params_text(tr.values, tr.values.values_of(p), header))
     return path
 
 
@@ -155,7 +163,38 @@ def _ipopt_paths(lib: Path | None, include: Path | None) -> tuple[Path, Path]:
 
 
 def _c_string(s: str) -> str:
-    return '"' + s.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    """A C string literal of any text: printable ASCII as is (``?`` escaped: no trigraphs),
+    every other byte of its UTF-8 as a three-digit octal escape."""
+    out = []
+    for byte in s.encode("utf-8", "surrogatepass"):
+        c = chr(byte)
+        if c in '"\\?':
+            out.append("\\" + c)
+        elif 32 <= byte < 127:
+            out.append(c)
+        else:
+            out.append(f"\\{byte:03o}")
+    return '"' + "".join(out) + '"'
+
+
+def _one_line(text: str) -> str:
+    """Text on one line (line breaks and other control characters as spaces)."""
+    return " ".join("".join(c if c.isprintable() else " " for c in text).split())
+
+
+def plain_name(name: str) -> str:
+    """A problem name as comments and the Makefile show it: letters, digits and ``_-.+,=:()``
+    and spaces, anything else as ``_`` (no line break, ``*/``, backslash or ``$``)."""
+    return re.sub(r"[^A-Za-z0-9 _\-.+,=:()]", "_", _one_line(name)) or "_"
+
+
+def _make_value(path: Path) -> str:
+    """A path as the value of a Makefile variable (``$`` and ``#`` escaped)."""
+    text = str(path)
+    if any(not c.isprintable() for c in text):
+        raise ExportError(f"{text!r}: a folder with a line break or control character cannot "
+                          "go into a Makefile; move IPOPT to a plain path")
+    return text.replace("$", "$$").replace("#", "\\#")
 
 
 def _c_doubles(values: np.ndarray) -> str:
@@ -173,8 +212,41 @@ def _names(names: Sequence[str]) -> str:
     return "{" + (", ".join(_c_string(n) for n in names) or "0") + "}"
 
 
-def model_sources(tr: Transcription, default_p: np.ndarray, guess: str) -> tuple[str, str]:
-    """ocg_model.h and ocg_model.c: dimensions, parameter-file keys, JSON field tables."""
+def static_labels(pb: Problem) -> dict[str, Any]:
+    """``Problem.labels`` as the exported solver writes them whatever its parameters: a side
+    of a bound that depends on the parameters (they change at run time) only by its affine
+    form in them, which a reader evaluates at the solution's parameters; a bound that depends
+    on them otherwise is left out."""
+    labels = pb.labels()
+    kept = []
+    for b in labels["bounds"]:
+        for key in ("lower", "upper"):
+            if f"{key}_affine" in b:
+                b[key] = None
+        if all(b.get(f"{k}_affine", True) is not None for k in ("lower", "upper")):
+            kept.append(b)
+    labels["bounds"] = kept
+    return labels
+
+
+def positive_parameters(schema: type[Any]) -> list[str]:
+    """The fields of a model's ``parameters`` schema (pydantic) that must be > 0, as the
+    problem files validate them (:func:`~ocgroupoid.model.values.positive`, ``Positive3``...):
+    the exported driver applies the same ranges to its parameter file."""
+    out = []
+    for name, info in getattr(schema, "model_fields", {}).items():
+        for meta in info.metadata:
+            func = getattr(meta, "func", None)
+            if func is checks.positive or (isinstance(func, partial) and func.func is
+                                           checks.check_vector and func.keywords.get("positive")):
+                out.append(name)
+    return out
+
+
+def model_sources(tr: Transcription, default_p: np.ndarray, guess: str,
+                  positive: Collection[str] = ()) -> tuple[str, str]:
+    """ocg_model.h and ocg_model.c: dimensions, parameter-file keys (with the physical
+    parameters in ``positive`` flagged: their numbers must be > 0), JSON field tables."""
     pb, G, values = tr.problem, tr.problem.groupoid, tr.values
     state_fields, k = [], 0
     for f in G.factors:  # a shown state is a vector (rows 0) or a matrix, row-major
@@ -189,8 +261,13 @@ def model_sources(tr: Transcription, default_p: np.ndarray, guess: str) -> tuple
                     for name, sl in pb.parameter_slices.items()]
     controls = [n for n, _ in pb.controls]
     multipliers = [n for n, c in pb.constraints for _ in range(c.numel())]
+    unknown = set(positive) - set(pb.params)
+    if unknown:
+        raise ConfigError(f"positive={sorted(unknown)}: not parameters of {pb.name!r}; "
+                          f"its parameters are {list(pb.params)}")
     blocks = ",\n".join(
-        f"  {{{_c_string(b.key)}, {b.values.start}, {b.size}, {_c_string(b.meaning)}}}"
+        f"  {{{_c_string(b.key)}, {b.values.start}, {b.size}, {_c_string(b.meaning)}, "
+        f"{int(b.kind == 'vector' and b.key in positive and b.key in pb.params)}}}"
         for b in values.blocks)
     defines = {
         "OCG_PROBLEM": _c_string(pb.name), "OCG_N": tr.N, "OCG_ORDER": pb.order,
@@ -203,15 +280,18 @@ def model_sources(tr: Transcription, default_p: np.ndarray, guess: str) -> tuple
         "OCG_RETRACTION": _c_string(tr.scheme.retraction), "OCG_RULE": _c_string(tr.disc.rule),
         "OCG_GUESS_LABEL": _c_string(guess),
         "OCG_MANIFOLDS_JSON": _c_string(json.dumps({f.state: f.manifold for f in G.factors})),
+        "OCG_LABELS_JSON": _c_string(json.dumps(static_labels(pb))),
     }
     header = "\n".join([
-        f"/* Generated by ocgroupoid {__version__} for {pb.name}: the exported instance's "
+        f"/* Generated by ocgroupoid {__version__} for {plain_name(pb.name)}: the exported "
+        "instance's "
         "dimensions and tables. */",
         "#ifndef OCG_MODEL_H", "#define OCG_MODEL_H", "",
         *[f"#define {k} {v}" for k, v in defines.items()], "",
-        "/* A key of a parameter file: numbers values[offset .. offset+size). */",
-        "typedef struct { const char *key; int offset; int size; const char *meaning; } "
-        "ocg_block;",
+        "/* A key of a parameter file: numbers values[offset .. offset+size); positive: each "
+        "must be > 0. */",
+        "typedef struct { const char *key; int offset; int size; const char *meaning; "
+        "int positive; } ocg_block;",
         "/* A named slice of an output row: offset, and rows x cols (rows 0: a vector). */",
         "typedef struct { const char *name; int offset; int rows; int cols; } ocg_field;", "",
         "extern const ocg_block ocg_blocks[];",
@@ -223,7 +303,7 @@ def model_sources(tr: Transcription, default_p: np.ndarray, guess: str) -> tuple
         "extern const char *const ocg_multiplier_names[];", "",
         "#endif", ""])
     source = "\n".join([
-        f"/* Generated by ocgroupoid {__version__} for {pb.name}. */",
+        f"/* Generated by ocgroupoid {__version__} for {plain_name(pb.name)}. */",
         '#include <stddef.h>', '#include "ocg_model.h"', "",
         f"const ocg_block ocg_blocks[] = {{\n{blocks}\n}};",
         f"const double ocg_default_values[] = {_c_doubles(values.values_of(default_p))};",
@@ -236,37 +316,99 @@ def model_sources(tr: Transcription, default_p: np.ndarray, guess: str) -> tuple
 
 
 def _fill(template: str, values: dict[str, Any]) -> str:
-    text = template
-    for k, v in values.items():
-        text = text.replace(f"@{k}@", str(v))
-    left = set(re.findall(r"@[A-Z_]+@", text))
+    """``@KEY@`` replaced by its value, in one pass (a value holding ``@X@`` stays as is)."""
+    left = set(re.findall(r"@([A-Z_]+)@", template)) - set(values)
     if left:
         raise ExportError(f"template placeholders without a value: {sorted(left)}")
-    return text
+    return re.sub(r"@([A-Z_]+)@", lambda m: str(values[m.group(1)]), template)
 
 
 def _blocks_table(values: ParameterValues) -> str:
     rows = ["| key | numbers | meaning |", "|---|---|---|"]
     for b in values.blocks:
-        rows.append(f"| `{b.key}` | {b.size} | {b.meaning}" + (f" ({b.note})" if b.note else "")
-                    + " |")
+        rows.append(f"| `{b.key}` | {b.size} | {_one_line(b.meaning)}"
+                    + (f" ({b.note})" if b.note else "") + " |")
     return "\n".join(rows)
 
 
-def _generate(tr: Transcription, folder: Path) -> None:
+def _generate(tr: Transcription) -> dict[str, str]:
+    """The CasADi-generated ``ocg_generated.c`` (with :data:`GENERATED_PRELUDE`) and ``.h``,
+    generated in a temporary folder."""
     cg = ca.CodeGenerator(GENERATED, {"with_header": True})
     for fn in (nlpsol_function(tr), guess_function(tr), pack_function(tr), post_function(tr)):
         cg.add(fn)
-    cg.generate(str(folder) + "/")
-    path = folder / f"{GENERATED}.c"
-    path.write_text(GENERATED_PRELUDE + path.read_text())
+    with tempfile.TemporaryDirectory(prefix="ocgroupoid-export-") as tmp:
+        cg.generate(tmp + "/")
+        c, h = (Path(tmp) / f"{GENERATED}.{ext}" for ext in ("c", "h"))
+        return {c.name: GENERATED_PRELUDE + c.read_text(), h.name: h.read_text()}
+
+
+def _digest(data: str | bytes) -> str:
+    return hashlib.sha256(data.encode() if isinstance(data, str) else data).hexdigest()
+
+
+def _manifest(folder: Path) -> dict[str, list[str]] | None:
+    """What an earlier export wrote in ``folder`` (file -> accepted digests), or None."""
+    try:
+        files = json.loads((folder / MANIFEST).read_text())["files"]
+        return {str(k): [str(d) for d in v] for k, v in files.items()}
+    except (OSError, ValueError, KeyError, TypeError, AttributeError):
+        return None
+
+
+def claim_folder(folder: str | Path, force: bool = False, what: str = "export folder") -> Path:
+    """Check, before anything is compiled, that ``folder`` may receive an export: it is new,
+    empty, or an earlier export whose files are unchanged (``MANIFEST`` records them).
+    Anything else (a README.md, Makefile, main.c... that export_c did not write, or one that
+    was edited since) is an ExportError unless ``force``. Returns the folder as a Path."""
+    folder = check_folder(folder, what)
+    if force or not folder.is_dir():
+        return folder
+    present = sorted(p.name for p in folder.iterdir() if p.name != MANIFEST)
+    if not present and not (folder / MANIFEST).exists():
+        return folder
+    known = _manifest(folder)
+    if known is None:
+        shown = ", ".join(present[:5]) + (", ..." if len(present) > 5 else "")
+        raise ExportError(f"{what} {folder}: is not empty ({shown}) and was not written by "
+                          "export-c; export into a new or empty folder, or pass --force "
+                          "(force=True) to overwrite its files")
+    for name in present:
+        path = folder / name
+        if name not in known:
+            continue  # the user's own files and the build's products are left alone
+        if not path.is_file() or _digest(path.read_bytes()) not in known[name]:
+            raise ExportError(f"{what} {folder}: {name} was changed since export-c wrote it; "
+                              "move your edits "
+                              "elsewhere (e.g. copy params.txt), or pass --force (force=True) "
+                              "to overwrite it")
+    return folder
+
+
+def _write_all(folder: Path, files: dict[str, str | bytes]) -> None:
+    """Write every file atomically; the manifest first accepts the old and the new contents
+    (an interrupted export can be redone), then only the new ones."""
+    old = _manifest(folder) or {}
+    new = {name: [_digest(data)] for name, data in files.items()}
+    both = {name: sorted(set(old.get(name, [])) | set(new.get(name, [])))
+            for name in set(old) | set(new)}
+
+    def record(entries: dict[str, list[str]]) -> None:
+        write_atomic(folder / MANIFEST, json.dumps(
+            {"ocgroupoid": __version__, "files": dict(sorted(entries.items()))}, indent=1) + "\n")
+
+    record(both)
+    for name, data in files.items():
+        write_atomic(folder / name, data)
+    record({**{k: v for k, v in old.items() if k not in new}, **new})
 
 
 def export_c(problem: Problem | Solver, folder: str | Path, N: int = 64,
              retraction: str = "cayley", rule: str = DEFAULT_RULE,
              ipopt: dict[str, Any] | None = None, build: bool = False,
              ipopt_lib: str | Path | None = None, ipopt_include: str | Path | None = None,
-             cflags: str = "", scheme: str = DEFAULT_SCHEME, steps: str = "uniform") -> Export:
+             cflags: str = "", scheme: str = DEFAULT_SCHEME, steps: str = "uniform",
+             force: bool = False, positive: Collection[str] = ()) -> Export:
     """Write ``problem`` compiled on N intervals as a C project in ``folder``.
 
     ``problem`` may also be a compiled :class:`Solver` (its N, scheme, retraction, rule and
@@ -277,43 +419,49 @@ def export_c(problem: Problem | Solver, folder: str | Path, N: int = 64,
     and links with an rpath. ``build=True`` runs ``make`` (with ``cflags``) and checks that
     ``folder/solve`` exists. Bounds that are parameter expressions are runtime inputs; adaptive
     steps are not exported (they need a second solve).
+
+    ``folder`` must be new, empty or an unchanged earlier export (:func:`claim_folder`;
+    ``force=True`` overwrites whatever is there); every file is written atomically.
+    ``positive`` names physical parameters whose numbers must be > 0 in a parameter file (the
+    driver refuses others with the message the problem files give;
+    :func:`positive_parameters` reads them off a model's schema).
     """
     if steps == "adaptive" or (isinstance(problem, Solver) and problem.disc.steps == "adaptive"):
         raise ConfigError("adaptive steps come from a second, phased solve placed on the "
                           "switches of a first one, which the exported solver does not run; "
                           "export with uniform steps (--set discretization.steps=uniform)")
-    if isinstance(problem, Solver):
-        solver = problem
-    elif isinstance(problem, Problem):
-        solver = Solver(problem, N, retraction, rule, {**(ipopt or {}), **EXPORT_IPOPT}, scheme,
-                        steps)
-    else:
+    if not isinstance(problem, (Solver, Problem)):
         raise ConfigError(f"export_c takes a Problem or a compiled Solver, got "
                           f"{type(problem).__name__}")
-    tr = solver.transcription
+    folder = claim_folder(folder, force)
     lib, include = _ipopt_paths(ipopt_lib, ipopt_include)
-    folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
+    if isinstance(problem, Solver):
+        solver = problem
+    else:
+        solver = Solver(problem, N, retraction, rule, {**(ipopt or {}), **EXPORT_IPOPT}, scheme,
+                        steps)
+    tr = solver.transcription
     p = tr.pack()
-    _generate(tr, folder)
+    files: dict[str, str | bytes] = dict(_generate(tr))
     guess = tr.guess_labels[0]  # what the C solver starts from
-    header, source = model_sources(tr, p, guess)
-    (folder / "ocg_model.h").write_text(header)
-    (folder / "ocg_model.c").write_text(source)
+    files["ocg_model.h"], files["ocg_model.c"] = model_sources(tr, p, guess, positive)
     for name in VERBATIM:
-        shutil.copyfile(TEMPLATES / name, folder / name)
+        files[name] = (TEMPLATES / name).read_bytes()
     pb = tr.problem
-    info = {"PROBLEM": pb.name, "N": tr.N, "RETRACTION": tr.disc.retraction,
+    info = {"PROBLEM": plain_name(pb.name), "N": tr.N, "RETRACTION": tr.disc.retraction,
             "RULE": tr.disc.rule, "ORDER": pb.order, "NX": tr.nx, "NP": tr.np, "NG": tr.ng,
             "NV": tr.values.size, "VERSION": __version__, "CASADI": ca.__version__,
-            "IPOPT_LIB": lib, "IPOPT_INCLUDE": include, "GUESS": guess,
+            "IPOPT_LIB": lib, "IPOPT_INCLUDE": include, "GUESS": _one_line(guess),
             "KEYS": _blocks_table(tr.values)}
-    (folder / "Makefile").write_text(_fill((TEMPLATES / "Makefile.in").read_text(), info))
-    (folder / "README.md").write_text(_fill((TEMPLATES / "README.md.in").read_text(), info))
-    (folder / "params.txt").write_text(params_text(tr.values, tr.values.values_of(p), (
-        f"{pb.name}: the exported instance (N={tr.N}, {tr.disc.retraction}). "
+    files["Makefile"] = _fill((TEMPLATES / "Makefile.in").read_text(), {
+        **info, "IPOPT_LIB": _make_value(lib), "IPOPT_INCLUDE": _make_value(include)})
+    files["README.md"] = _fill((TEMPLATES / "README.md.in").read_text(), info)
+    files["params.txt"] = params_text(tr.values, tr.values.values_of(p), (
+        f"{plain_name(pb.name)}: the exported instance (N={tr.N}, {tr.disc.retraction}). "
         "Edit values, drop keys to keep their defaults,\nthen run ./solve params.txt. "
-        "Format: README.md.")))
+        "Format: README.md."))
+    folder.mkdir(parents=True, exist_ok=True)
+    _write_all(folder, files)
     binary = make(folder, cflags) if build else None
     return Export(folder, pb.name, tr.N, tr.nx, tr.np, tr.ng, tr.values.size, binary, solver)
 

@@ -15,17 +15,22 @@ Symbols in expressions: the parameters; the base coordinates of pair and sphere 
 their state name); the velocities (by name); their rates ``<velocity>_dot`` (order 2); and,
 with a Lagrangian, the controls ``u`` (and each control by its name). Without a Lagrangian,
 ``controls`` maps names to expressions. ``order: 1`` gives a first-order problem
-``min int cost(q, y) dt`` subject to the constraints.
+``min int cost(q, y) dt`` subject to the constraints. The optional ``describe`` maps names to
+their unit (``x: m``) or to ``{meaning, unit, components}`` for plots and solution files
+(:meth:`~ocgroupoid.model.problem.Problem.describe`).
 """
 
 from __future__ import annotations
 
-from typing import Annotated, Any, Literal
+import difflib
+import re
+from contextlib import contextmanager
+from typing import Annotated, Any, Iterator, Literal
 
 import casadi as ca
 from pydantic import BaseModel, BeforeValidator, Field, create_model
 
-from ..errors import ConfigError
+from ..errors import BoundaryError, ConfigError, DimensionError
 from ..groupoid import Groupoid, LieGroupFactor, Pair, SphereAction
 from ..groupoid.base import Factor
 from ..lie import SE2, SE3, SO3
@@ -49,13 +54,24 @@ class FactorDefinition(Strict):
         "g_{k+1} = w_k g_k")
 
 
+class Described(Strict):
+    """One entry of ``definition.describe``: what a quantity means and its unit."""
+
+    meaning: str | None = Field(None, description="what the quantity is (plot titles)")
+    unit: str | list[str] | None = Field(
+        None, description="one unit for every component, or a list of one per component")
+    components: list[str] | None = Field(None, description="one label per component (legend)")
+
+
 class Definition(Strict):
     """The ``definition`` section of a custom model."""
 
     groupoid: list[FactorDefinition] = Field(min_length=1, description="factors of the product")
     order: Literal[1, 2] = Field(2, description="2: second-order cost; 1: first-order cost")
     lagrangian: str | None = Field(None, description="reduced Lagrangian l(q, y) (order 2)")
-    actuated: list[str] | None = Field(None, description="velocities that carry controls")
+    actuated: str | list[str | int] | None = Field(
+        None, description="velocities that carry controls: names (Omega), components "
+        "(Omega[0], dphi[0:2]) or indices of all the velocities, as a list or one string")
     input_matrix: str | None = Field(None, description="F = input_matrix @ u (default I)")
     controls: list[str] | dict[str, str] | None = Field(
         None, description="control names (with a Lagrangian) or name: expression")
@@ -66,6 +82,10 @@ class Definition(Strict):
         default_factory=dict, description="path inequalities name: expression <= 0, imposed "
         "wherever the scheme evaluates its constraints (e.g. a keep-out cone)")
     terminal_cost: str | None = Field(None, description="Mayer term on the final node")
+    describe: dict[str, Described | str] = Field(
+        default_factory=dict, description="optional names and units for plots and solution "
+        "files: name: unit, or name: {meaning, unit, components}; a name is a state, a "
+        "velocity, a control, u (all the controls), a constraint (its multipliers) or t")
 
 
 GROUPS = {"so3": SO3, "se3": SE3, "se2": SE2}  # the group factor types
@@ -134,6 +154,9 @@ def _values(params: BaseModel, where: Any) -> dict[str, list[float]]:
     for name, value in (params.model_extra or {}).items():
         _reserved(name, where("parameters", name))
         vec = value if isinstance(value, list) else [value]
+        if not vec:
+            raise ConfigError(f"{where('parameters', name)}: parameters.{name} is an empty "
+                              "list; give it at least one number, or remove it")
         try:
             out[name] = check_vector(vec, len(vec))
         except ConfigError as err:
@@ -165,24 +188,132 @@ def _problem(d: Definition, G: Groupoid, params: BaseModel, initial: BaseModel,
                               "the actuated velocities in definition.actuated")
         B = expr(d.input_matrix, "definition", "input_matrix") if d.input_matrix else None
         names = d.controls if isinstance(d.controls, list) else None
-        try:
-            u = pb.mechanics(expr(d.lagrangian, "definition", "lagrangian"), d.actuated, B, names)
-        except ConfigError as err:
-            raise ConfigError(f"{where('definition')}: definition: {err}") from None
+        lagrangian = expr(d.lagrangian, "definition", "lagrangian")
+        actuated = actuated_indices(G, d.actuated, where("definition", "actuated"))
+        with located(where, "definition", "lagrangian"):
+            u = pb.mechanics(lagrangian, actuated, B, names)
         symbols["u"] = u
         for (cname, _), k in zip(pb.controls, range(u.numel())):
             symbols[cname] = u[k]
     elif isinstance(d.controls, dict):
         exprs = [expr(v, "definition", "controls", k) for k, v in d.controls.items()]
-        pb.report_controls(ca.vertcat(*exprs), list(d.controls))
-    pb.minimize(expr(d.cost, "definition", "cost"))
+        with located(where, "definition", "controls"):
+            pb.report_controls(ca.vertcat(*[ca.vec(e) for e in exprs]), list(d.controls))
+    cost = expr(d.cost, "definition", "cost")
+    with located(where, "definition", "cost"):
+        pb.minimize(cost)
     for cname, text in d.constraints.items():
-        pb.subject_to(expr(text, "definition", "constraints", cname), name=cname)
+        c = expr(text, "definition", "constraints", cname)
+        with located(where, "definition", "constraints", cname):
+            pb.subject_to(c, name=cname)
+    for qname, entry in d.describe.items():
+        e = Described(unit=entry) if isinstance(entry, str) else entry
+        try:
+            pb.describe(qname, e.meaning, e.unit, e.components)
+        except ConfigError as err:
+            raise ConfigError(f"{where('definition', 'describe', qname)}: {err}") from None
     for cname, text in d.path.items():
-        pb.bound(expr(text, "definition", "path", cname), upper=0.0, name=cname)
+        c = expr(text, "definition", "path", cname)
+        with located(where, "definition", "path", cname):
+            pb.bound(c, upper=0.0, name=cname)
     if d.terminal_cost is not None:
-        pb.terminal_cost(expr(d.terminal_cost, "definition", "terminal_cost"))
-    pb.initial(**{k: v for k, v in initial.model_dump().items() if v is not None})
-    pb.final(**{k: v for k, v in final.model_dump().items() if v is not None})
+        c = expr(d.terminal_cost, "definition", "terminal_cost")
+        with located(where, "definition", "terminal_cost"):
+            pb.terminal_cost(c)
+    with located(where, "initial"):
+        pb.initial(**{k: v for k, v in initial.model_dump().items() if v is not None})
+    with located(where, "final"):
+        pb.final(**{k: v for k, v in final.model_dump().items() if v is not None})
     pb.horizon(T)
     return pb
+
+
+@contextmanager
+def located(where: Any, *path: str) -> Iterator[None]:
+    """Errors of the Problem API (and CasADi's, on shapes) as messages at ``path``."""
+    try:
+        yield
+    except (ConfigError, DimensionError, BoundaryError) as err:
+        raise ConfigError(f"{where(*path)}: {'.'.join(path)}: {err}") from None
+    except RuntimeError as err:  # CasADi: e.g. a dimension mismatch between expressions
+        reason = str(err).strip().splitlines()[-1][:200] if str(err).strip() else ""
+        raise ConfigError(f"{where(*path)}: {'.'.join(path)}: the expressions do not fit "
+                          f"together ({reason}); check the sizes of the parameters and "
+                          "symbols used") from None
+
+
+_COMPONENT = re.compile(r"\s*([A-Za-z_]\w*)\s*(?:\[\s*([^\]]*)\])?\s*")
+
+
+def actuated_indices(G: Groupoid, entries: str | list[str | int] | None, where: str
+                     ) -> list[int]:
+    """Indices into the velocities y of ``definition.actuated``: velocity names (``Omega``),
+    components (``Omega[0]``, ``dphi[0:2]``, ``Omega[-1]``) or indices of y, in a list or in
+    one string separated by commas."""
+    items: list[str | int] = []
+    for e in [entries] if isinstance(entries, str) else entries or []:
+        if isinstance(e, str):
+            items.extend(part for part in re.split(r",(?![^\[]*\])", e) if part.strip())
+        else:
+            items.append(e)
+    if not items:
+        raise ConfigError(f"{where}: definition.actuated is empty; list the actuated "
+                          f"velocities, e.g. [{G.velocity_names[0]}]")
+    out: list[int] = []
+    n = G.algebra_dim
+    for item in items:
+        if isinstance(item, bool) or not isinstance(item, (int, str)):
+            raise ConfigError(f"{where}: definition.actuated: {item!r} is not a velocity name "
+                              f"or an index; velocities are {', '.join(G.velocity_names)}")
+        picked = _actuated_item(G, item, where) if isinstance(item, str) else [item]
+        for i in picked:
+            if not 0 <= i < n:
+                raise ConfigError(f"{where}: definition.actuated: index {i} is out of range; "
+                                  f"the velocities have {n} components (0..{n - 1})")
+            if i in out:
+                raise ConfigError(f"{where}: definition.actuated: {item!r} names velocity "
+                                  f"component {i} a second time; list each component once")
+            out.append(i)
+    return out
+
+
+def _actuated_item(G: Groupoid, item: str, where: str) -> list[int]:
+    """The indices of y one entry of ``definition.actuated`` names."""
+    m = _COMPONENT.fullmatch(item)
+    if m is None:
+        raise ConfigError(f"{where}: definition.actuated: {item!r} is not a velocity or a "
+                          "component of one; write e.g. Omega, Omega[0] or Omega[0:2]")
+    name, index = m.group(1), m.group(2)
+    if name not in G.velocity_names:
+        states = {f.state: f.velocity for f in G.factors}
+        hint = f" {name} is a state: its velocity is {states[name]}." if name in states else ""
+        close = difflib.get_close_matches(name, G.velocity_names, 1)
+        hint += f" did you mean {close[0]!r}?" if close and not hint else ""
+        raise ConfigError(f"{where}: definition.actuated: unknown velocity {name!r};{hint} "
+                          f"velocities are {', '.join(G.velocity_names)}")
+    i, _ = G.by_velocity(name)
+    span = G.velocity_layout.slices[i]
+    block = range(span.start, span.stop)
+    if index is None:
+        return list(block)
+    parts: list[int | None] = []
+    for p in index.split(":"):
+        text = p.strip()
+        if text and not re.fullmatch(r"[-+]?\d{1,9}", text):
+            raise ConfigError(f"{where}: definition.actuated: {item!r}: write an integer "
+                              f"index or a slice such as {name}[0] or {name}[0:2]")
+        parts.append(int(text) if text else None)
+    if len(parts) == 1:
+        k = parts[0]
+        if k is None or not -len(block) <= k < len(block):
+            raise ConfigError(f"{where}: definition.actuated: {item!r}: {name} has "
+                              f"{len(block)} components (0..{len(block) - 1})")
+        return [block[k]]
+    if len(parts) > 3 or (len(parts) == 3 and parts[2] == 0):
+        raise ConfigError(f"{where}: definition.actuated: {item!r}: write a slice such as "
+                          f"{name}[0:2] (a step, if any, is not 0)")
+    picked = list(block[slice(*parts)])
+    if not picked:
+        raise ConfigError(f"{where}: definition.actuated: {item!r} selects no component of "
+                          f"{name}, which has {len(block)}")
+    return picked

@@ -6,18 +6,27 @@ constants (``Omega[0]``, ``q[1:3]``), lists (``[a, b, c]`` is a column) and call
 functions in :data:`FUNCTIONS`. Anything else — attribute access, imports, lambdas,
 comprehensions, keywords, strings, names that were not declared — is rejected with a message
 that names the construct.
+
+What CasADi would only find out later (or never) is checked here, at parse time, and named:
+indices and slices within the length of what they index, the shapes of the operands of every
+operator and function, and the arithmetic of constants (division by zero, overflow, complex
+or undefined results: every constant intermediate must be a finite real number). A long sum
+``a + b + c + ...`` is folded in a loop, not by recursion.
 """
 
 from __future__ import annotations
 
 import ast
 import difflib
+import math
 from typing import Any, Callable, Mapping
 
 import casadi as ca
 import numpy as np
 
 from ..errors import ConfigError
+
+Value = Any  # a Python float (a constant) or a casadi.SX
 
 
 def _norm(x: Any) -> Any:
@@ -34,11 +43,33 @@ FUNCTIONS: dict[str, tuple[Callable[..., Any], int]] = {
     "min": (ca.fmin, 2), "max": (ca.fmax, 2),
 }
 CONSTANTS = {"pi": float(np.pi), "e": float(np.e)}
+ELEMENTWISE = {"atan2", "min", "max"}  # two arguments of one shape (or a scalar)
 
 _BINARY = {ast.Add: lambda a, b: a + b, ast.Sub: lambda a, b: a - b,
            ast.Mult: lambda a, b: a * b, ast.Div: lambda a, b: a / b,
            ast.Pow: lambda a, b: a ** b, ast.MatMult: lambda a, b: ca.mtimes(a, b)}
+_SYMBOL = {ast.Add: "+", ast.Sub: "-", ast.Mult: "*", ast.Div: "/", ast.Pow: "**",
+           ast.MatMult: "@"}
 _UNARY = {ast.USub: lambda a: -a, ast.UAdd: lambda a: a}
+_CASADI_ERRORS = (RuntimeError, NotImplementedError, TypeError, ValueError)
+
+
+def shape(v: Value) -> tuple[int, int]:
+    """Rows and columns of a compiled value (a constant is 1 x 1)."""
+    return (1, 1) if isinstance(v, float) else (v.size1(), v.size2())
+
+
+def _shown(s: tuple[int, int]) -> str:
+    return "a scalar" if s == (1, 1) else f"{s[0]}x{s[1]}"
+
+
+def _text(node: ast.AST, limit: int = 60) -> str:
+    """The source of ``node``, shortened for messages."""
+    try:
+        text = ast.unparse(node)
+    except RecursionError:  # pragma: no cover - nodes this deep are refused earlier
+        text = type(node).__name__
+    return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
 class _Compiler:
@@ -50,7 +81,7 @@ class _Compiler:
         at = f" (column {col + 1})" if col is not None else ""
         return ConfigError(f"{self.where}: {what}{at}; {fix}")
 
-    def __call__(self, node: ast.AST) -> Any:
+    def __call__(self, node: ast.AST) -> Value:
         method = getattr(self, f"_{type(node).__name__}", None)
         if method is None:
             raise self.fail(node, f"{type(node).__name__} is not allowed in an expression",
@@ -58,18 +89,66 @@ class _Compiler:
                             f"functions {', '.join(sorted(FUNCTIONS))}")
         return method(node)
 
-    def _Expression(self, node: ast.Expression) -> Any:
+    # -- values are finite: constants checked where they are made -------------------------
+
+    def finite(self, node: ast.AST, value: Value) -> Value:
+        """``value``, refused when it is constant and not a finite real number."""
+        if isinstance(value, complex):
+            raise self.fail(node, f"{_text(node)} has no real value (a complex result)",
+                            "a negative base needs an integer exponent")
+        if isinstance(value, float):
+            numbers = np.array([value])
+        elif value.is_constant():
+            numbers = np.array(ca.evalf(value)).ravel()
+        else:
+            return value
+        if not np.all(np.isfinite(numbers)):
+            kind = "infinite (it overflows)" if np.any(np.isinf(numbers)) else "undefined (NaN)"
+            raise self.fail(node, f"{_text(node)} is {kind}", "write a finite expression")
+        return value
+
+    def call(self, node: ast.AST, fn: Callable[..., Any], *args: Value) -> Value:
+        """``fn(*args)``, CasADi's and Python's arithmetic errors named at ``node``."""
+        try:
+            with np.errstate(all="ignore"):
+                value = fn(*args)
+        except ZeroDivisionError:
+            raise self.fail(node, f"{_text(node)} divides by zero", "fix the divisor") from None
+        except OverflowError:
+            raise self.fail(node, f"{_text(node)} overflows (beyond 1.8e+308)",
+                            "write a smaller number") from None
+        except _CASADI_ERRORS as err:
+            reason = str(err).strip().splitlines()[-1][:160] if str(err).strip() else ""
+            raise self.fail(node, f"{_text(node)} cannot be evaluated ({reason})",
+                            "check the shapes and values of its arguments") from None
+        if isinstance(value, ca.DM):
+            value = ca.SX(value)
+        return self.finite(node, value)
+
+    # -- leaves ---------------------------------------------------------------------------
+
+    def _Expression(self, node: ast.Expression) -> Value:
         return self(node.body)
 
-    def _Constant(self, node: ast.Constant) -> Any:
+    def _Constant(self, node: ast.Constant) -> Value:
         if isinstance(node.value, bool) or not isinstance(node.value, (int, float)):
             raise self.fail(node, f"the constant {node.value!r} is not a number",
                             "only numbers may appear as constants")
-        return float(node.value)
+        try:
+            value = float(node.value)
+        except OverflowError:
+            digits = int(abs(node.value).bit_length() * 0.30103) + 1
+            raise self.fail(node, f"the integer of about {digits} digits is too large for a "
+                            "float (beyond 1.8e+308)", "write a smaller number") from None
+        if math.isinf(value):
+            raise self.fail(node, f"the number {_text(node)} is too large for a float (beyond "
+                            "1.8e+308)", "write a smaller number")
+        return value
 
-    def _Name(self, node: ast.Name) -> Any:
+    def _Name(self, node: ast.Name) -> Value:
         if node.id in self.symbols:
-            return self.symbols[node.id]
+            value = self.symbols[node.id]
+            return value if isinstance(value, float) else ca.SX(value)
         if node.id in CONSTANTS:
             return CONSTANTS[node.id]
         if node.id in FUNCTIONS:
@@ -80,46 +159,142 @@ class _Compiler:
         raise self.fail(node, f"unknown name {node.id!r}",
                         f"{hint}declared symbols are {', '.join(known)}")
 
-    def _BinOp(self, node: ast.BinOp) -> Any:
-        op = _BINARY.get(type(node.op))
-        if op is None:
+    # -- operators --------------------------------------------------------------------------
+
+    def _BinOp(self, node: ast.BinOp) -> Value:
+        chain = []  # a + b + c + ... is BinOp(BinOp(a, b), c): fold the left spine in a loop
+        left: ast.AST = node
+        while isinstance(left, ast.BinOp):
+            chain.append(left)
+            left = left.left
+        value = self(left)
+        for op in reversed(chain):
+            value = self.binary(op, value, self(op.right))
+        return value
+
+    def binary(self, node: ast.BinOp, a: Value, b: Value) -> Value:
+        kind = type(node.op)
+        if kind not in _BINARY:
             raise self.fail(node, f"the operator {type(node.op).__name__} is not allowed",
                             "use + - * / ** or @")
-        return op(self(node.left), self(node.right))
+        sa, sb = shape(a), shape(b)
 
-    def _UnaryOp(self, node: ast.UnaryOp) -> Any:
-        op = _UNARY.get(type(node.op))
-        if op is None:
-            raise self.fail(node, f"the operator {type(node.op).__name__} is not allowed",
-                            "use unary minus")
-        return op(self(node.operand))
+        def operands() -> str:  # only on failure: the text of a long sum is long
+            return f"{_text(node.left, 30)} ({_shown(sa)}) {_SYMBOL[kind]} " \
+                   f"{_text(node.right, 30)} ({_shown(sb)})"
 
-    def _Call(self, node: ast.Call) -> Any:
+        if kind is ast.MatMult:
+            if sa[1] != sb[0]:
+                raise self.fail(node, f"{operands()}: a matrix product needs as many columns on "
+                                "the left as rows on the right",
+                                "use dot(a, b) for two vectors, * for a scalar factor")
+            return self.call(node, _BINARY[kind], ca.SX(a), ca.SX(b))
+        if sa != sb and (1, 1) not in (sa, sb):
+            raise self.fail(node, f"{operands()}: the shapes differ",
+                            "give both sides the same length, or make one a scalar")
+        if kind is ast.Div and self.constant_zero(b):
+            raise self.fail(node, f"{_text(node)} divides by zero", "fix the divisor")
+        if kind is ast.Pow and isinstance(a, float) and isinstance(b, float) and a < 0 \
+                and not b.is_integer():
+            raise self.fail(node, f"{_text(node)} has no real value ({a:g} to a non-integer "
+                            "power)", "a negative base needs an integer exponent")
+        return self.call(node, _BINARY[kind], a, b)
+
+    @staticmethod
+    def constant_zero(v: Value) -> bool:
+        """True when ``v`` is a constant with a zero entry."""
+        if isinstance(v, float):
+            return v == 0.0
+        return bool(v.is_constant() and np.any(np.array(ca.evalf(v)) == 0.0))
+
+    def _UnaryOp(self, node: ast.UnaryOp) -> Value:
+        ops = []
+        inner: ast.AST = node
+        while isinstance(inner, ast.UnaryOp):
+            if type(inner.op) not in _UNARY:
+                raise self.fail(inner, f"the operator {type(inner.op).__name__} is not allowed",
+                                "use unary minus")
+            ops.append(_UNARY[type(inner.op)])
+            inner = inner.operand
+        value = self(inner)
+        for op in reversed(ops):
+            value = op(value)
+        return value
+
+    def _Call(self, node: ast.Call) -> Value:
         if not isinstance(node.func, ast.Name) or node.func.id not in FUNCTIONS:
-            name = node.func.id if isinstance(node.func, ast.Name) else ast.unparse(node.func)
+            name = node.func.id if isinstance(node.func, ast.Name) else _text(node.func)
             raise self.fail(node, f"{name!r} is not an allowed function",
                             f"allowed: {', '.join(sorted(FUNCTIONS))}")
         if node.keywords:
             raise self.fail(node, "keyword arguments are not allowed", "pass arguments by position")
-        fn, arity = FUNCTIONS[node.func.id]
+        name = node.func.id
+        fn, arity = FUNCTIONS[name]
         if len(node.args) != arity:
-            raise self.fail(node, f"{node.func.id} takes {arity} argument(s), got "
+            raise self.fail(node, f"{name} takes {arity} argument(s), got "
                             f"{len(node.args)}", "fix the call")
-        return fn(*(self(a) for a in node.args))
+        args = [self(a) for a in node.args]
+        shapes = [shape(a) for a in args]
 
-    def _List(self, node: ast.List) -> Any:
-        return ca.vertcat(*(self(e) for e in node.elts))
+        def shown() -> str:
+            return ", ".join(f"{_text(a, 30)} ({_shown(s)})" for a, s in zip(node.args, shapes))
+
+        if name == "cross" and not (shapes[0] == shapes[1] and sorted(shapes[0]) == [1, 3]):
+            raise self.fail(node, f"cross needs two 3-vectors of one shape, got {shown()}",
+                            "pass two vectors of 3 components, e.g. cross(Omega, [0, 0, 1])")
+        if name == "dot" and shapes[0] != shapes[1]:
+            raise self.fail(node, f"dot needs two arguments of one shape, got {shown()}",
+                            "give both the same length")
+        if name in ELEMENTWISE and shapes[0] != shapes[1] and (1, 1) not in shapes:
+            raise self.fail(node, f"{name} needs arguments of one shape (or a scalar), got "
+                            f"{shown()}", "give both the same length")
+        if name == "diag" and 1 not in shapes[0] and shapes[0][0] != shapes[0][1]:
+            raise self.fail(node, f"diag needs a vector or a square matrix, got {shown()}",
+                            "pass a vector (its diagonal matrix) or a square matrix")
+        return self.call(node, fn, *[ca.SX(a) for a in args])
+
+    def _List(self, node: ast.List) -> Value:
+        if not node.elts:
+            raise self.fail(node, "an empty list", "write at least one component")
+        parts = [self(e) for e in node.elts]
+        widths = {shape(p)[1] for p in parts}
+        if len(widths) > 1:
+            raise self.fail(node, f"the components of {_text(node)} have different numbers of "
+                            "columns", "stack scalars or columns of one width")
+        return self.call(node, ca.vertcat, *[ca.SX(p) for p in parts])
 
     _Tuple = _List
 
-    def _Subscript(self, node: ast.Subscript) -> Any:
+    # -- indexing ---------------------------------------------------------------------------
+
+    def _Subscript(self, node: ast.Subscript) -> Value:
         base = self(node.value)
+        what = _text(node.value, 30)
+        if isinstance(base, float):
+            raise self.fail(node, f"{what} is a number and has no components to index",
+                            "drop the index")
+        n = base.numel()
         index = node.slice
         if isinstance(index, ast.Slice):
-            parts = [self._index(p) if p is not None else None
-                     for p in (index.lower, index.upper, index.step)]
-            return base[slice(*parts)]
-        return base[self._index(index)]
+            lo, hi, step = (self._index(p) if p is not None else None
+                            for p in (index.lower, index.upper, index.step))
+            if step == 0:
+                raise self.fail(node, f"{_text(node)}: a slice step cannot be zero",
+                                "write a step of 1 or more, or leave it out (q[0:3])")
+            picked = list(range(*slice(lo, hi, step).indices(n)))
+            if not picked:
+                raise self.fail(node, f"{_text(node)} selects no component of {what}, which "
+                                f"has {n}", f"choose indices within 0..{n - 1}")
+            if base.size2() == 1 or base.size1() == 1:
+                return base[picked]
+            return ca.vertcat(*[base[i] for i in picked])
+        i = self._index(index)
+        if not -n <= i < n:
+            raise self.fail(node, f"{_text(node)}: index {i} is out of range for {what}, which "
+                            f"has {n} component{'s' if n != 1 else ''}",
+                            f"use 0..{n - 1} (or -{n}..-1 from the end)" if n else
+                            f"{what} is empty")
+        return base[i % n]
 
     def _index(self, node: ast.AST) -> int:
         value = node.value if isinstance(node, ast.Constant) else None
@@ -130,7 +305,7 @@ class _Compiler:
             raise self.fail(node, "indices must be integer constants", "write e.g. Omega[0]")
         return value
 
-    def _Attribute(self, node: ast.Attribute) -> Any:
+    def _Attribute(self, node: ast.Attribute) -> Value:
         raise self.fail(node, f"attribute access '.{node.attr}' is not allowed",
                         "use the listed functions instead of methods or modules")
 
@@ -138,7 +313,14 @@ class _Compiler:
 def compile_expression(text: Any, symbols: Mapping[str, Any], where: str) -> Any:
     """The CasADi expression of ``text`` over ``symbols`` (``where`` names the key for errors)."""
     if isinstance(text, (int, float)) and not isinstance(text, bool):
-        return ca.SX(float(text))
+        try:
+            value = float(text)
+        except OverflowError:
+            raise ConfigError(f"{where}: the number is too large for a float (beyond "
+                              "1.8e+308); write a smaller number") from None
+        if not math.isfinite(value):
+            raise ConfigError(f"{where}: {text!r} is not finite; write a finite number")
+        return ca.SX(value)
     if not isinstance(text, str):
         raise ConfigError(f"{where}: an expression is a string, got {text!r}")
     if "__" in text:
@@ -148,5 +330,12 @@ def compile_expression(text: Any, symbols: Mapping[str, Any], where: str) -> Any
         tree = ast.parse(text.strip(), mode="eval")
     except SyntaxError as err:
         raise ConfigError(f"{where}: not a valid expression ({err.msg} at column "
-                          f"{err.offset}): {text!r}") from None
-    return ca.SX(_Compiler(symbols, where)(tree))
+                          f"{err.offset}): {text[:80]!r}") from None
+    except (RecursionError, MemoryError):
+        raise ConfigError(f"{where}: the expression is nested or chained too deeply for the "
+                          "parser (a sum of a few thousand terms at most); shorten it") from None
+    try:
+        return ca.SX(_Compiler(symbols, where)(tree))
+    except RecursionError:
+        raise ConfigError(f"{where}: the expression is nested too deeply (brackets or "
+                          "functions within each other); shorten it") from None

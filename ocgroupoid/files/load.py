@@ -14,11 +14,15 @@ A problem file is data::
 ``--set key=value`` overrides (the value parsed as YAML), validates everything
 (:mod:`~ocgroupoid.files.schema`, the model's sections, messages from
 :mod:`~ocgroupoid.files.messages`), and ``build`` turns it into a Problem. A boundary key
-left out, or written null (also per component: ``[0, 0, null]``), is free.
+left out, or written null (also per component: ``[0, 0, null]``), is free. A number in
+``parameters``, ``initial`` and ``final`` may be written as an expression of constants, as in
+expressions: ``theta: [pi]``, ``angle: pi/2``. What the machine can take is checked too
+(:mod:`~ocgroupoid.files.limits`): N within a memory estimate, an installed linear solver.
 """
 
 from __future__ import annotations
 
+import ast
 import difflib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -30,8 +34,9 @@ from ..errors import ConfigError
 from ..model.problem import Problem
 from ..models import MODELS
 from ..models.registry import ModelSpec
-from . import bounds
+from . import bounds, limits
 from .custom import Definition, spec as custom_spec
+from .expressions import CONSTANTS, FUNCTIONS, compile_expression
 from .messages import validate
 from .schema import ProblemFile
 from .source import Locator, apply_override, read_yaml
@@ -66,7 +71,16 @@ def load(path: str | Path | None = None, overrides: list[str] | None = None,
     data = dict(data)
     overridden = {apply_override(data, a) for a in overrides or []}
     locate = Locator(path, lines, overridden)
+    for key in CONSTANT_SECTIONS:
+        if key in data:
+            data[key] = constants(data[key], (key,), locate)
     top = validate(ProblemFile, data, (), locate)
+    finer = [n for n in top.solver.continuation if n >= top.horizon.N]
+    if finer:
+        raise ConfigError(f"{locate('solver', 'continuation')}: solver.continuation {finer} "
+                          f"must be coarser than horizon.N = {top.horizon.N}; lower or drop "
+                          "them")
+    limits.check_ipopt_options(top.solver.ipopt, locate)
     if top.model == "custom":
         if top.definition is None:
             raise ConfigError(f"{locate('model')}: model: custom needs a definition section "
@@ -90,12 +104,45 @@ def load(path: str | Path | None = None, overrides: list[str] | None = None,
                   locate=locate)
 
 
+CONSTANT_SECTIONS = ("parameters", "initial", "final")  # numbers may be written as pi/2
+
+
+def constants(value: Any, path: tuple, locate: Locator) -> Any:
+    """``value`` with every text that is an expression of constants only (``pi/2``,
+    ``-2*pi``) replaced by its number; other texts (``identity``) are left to the schemas."""
+    if isinstance(value, dict):
+        return {k: constants(v, (*path, k), locate) for k, v in value.items()}
+    if isinstance(value, list):
+        return [constants(v, (*path, i), locate) for i, v in enumerate(value)]
+    if not isinstance(value, str) or not _only_constants(value):
+        return value
+    where = f"{locate(*path)}: {'.'.join(map(str, path))}"
+    expr = compile_expression(value, {}, where)
+    if expr.numel() != 1:
+        return value
+    return float(expr)
+
+
+def _only_constants(text: str) -> bool:
+    """True when ``text`` parses as an expression whose names are constants and functions."""
+    try:
+        tree = ast.parse(text.strip(), mode="eval")
+    except (SyntaxError, ValueError, RecursionError, MemoryError):
+        return False
+    names = {n.id for n in ast.walk(tree) if isinstance(n, ast.Name)}
+    return bool(names) and names <= set(CONSTANTS) | set(FUNCTIONS) or \
+        (not names and not isinstance(tree.body, ast.Constant))
+
+
 def build(cfg: Config) -> Problem:
     """The Problem a validated Config describes: the model's, with the file's horizon,
     objective weights and bounds."""
     f, locate = cfg.file, cfg.locate
     horizon = f.horizon
     pb = cfg.spec.build(cfg.parameters, cfg.initial, cfg.final, horizon.guess, cfg.name)
+    starts = 0 if f.solver.multistart is False else \
+        3 if f.solver.multistart is True else int(f.solver.multistart)
+    limits.check_size(pb, horizon.N, starts, locate("horizon", "N"))
     try:
         if horizon.T == "free":
             pb.horizon(horizon.guess, free=True, T_min=horizon.T_min, T_max=horizon.T_max)

@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import difflib
+import re
 from typing import Any
 
 from pydantic import BaseModel, ValidationError
 
 from ..errors import ConfigError
+from ..model.values import short
 from .source import Locator
 
 
@@ -19,31 +21,35 @@ def _fix(err: dict[str, Any], key: str, known: list[str] | None) -> str:
     if kind == "extra_forbidden":
         close = difflib.get_close_matches(last, known or [], 1)
         hint = f" did you mean {close[0]!r}?" if close else ""
-        return (f"unknown key {key!r};{hint} keys allowed here: {', '.join(known or [])}")
+        allowed = f" keys allowed here: {', '.join(known)}" if known else " remove it"
+        return f"unknown key {key!r};{hint}{allowed}"
     if kind == "missing":
         return f"missing key {key!r}; add it (see problems/ for an example)"
     if kind in ("int_type", "int_from_float", "int_parsing"):
-        return f"{key} must be an integer (e.g. 64), got {value!r}"
+        return f"{key} must be an integer (e.g. 64), got {short(value)}"
     if kind in ("greater_than_equal", "greater_than"):
         bound = ctx.get("ge", ctx.get("gt"))
         op = ">=" if kind == "greater_than_equal" else ">"
-        return f"{key} must be {op} {bound}, got {value!r}; raise it"
+        return f"{key} must be {op} {bound}, got {short(value)}; raise it"
     if kind == "literal_error":
         options = [o.strip(" '") for o in str(ctx.get("expected", "")).replace(" or ", ", ")
                    .split(",")]
         close = difflib.get_close_matches(str(value), options, 1)
         hint = f" did you mean {close[0]!r}?" if close else ""
-        return f"{key}: {value!r} is not allowed;{hint} choose one of {', '.join(options)}"
+        return f"{key}: {short(value)} is not allowed;{hint} choose one of {', '.join(options)}"
     if kind in ("dict_type", "model_type", "model_attributes_type"):
-        return f"{key} must be a mapping (key: value), got {value!r}"
+        return f"{key} must be a mapping (key: value), got {short(value)}"
+    if kind == "too_long":
+        return (f"{key} has {ctx.get('actual_length', 'too many')} entries, at most "
+                f"{ctx.get('max_length')} are allowed; drop some")
     if kind == "list_type":
-        return f"{key} must be a list, e.g. [1, 2, 3], got {value!r}"
+        return f"{key} must be a list, e.g. [1, 2, 3], got {short(value)}"
     if kind in ("string_type",):
-        return f"{key} must be text, got {value!r}; quote it"
+        return f"{key} must be text, got {short(value)}; quote it"
     if kind in ("bool_type", "bool_parsing"):
-        return f"{key} must be true or false, got {value!r}"
+        return f"{key} must be true or false, got {short(value)}"
     if kind in ("float_type", "float_parsing", "finite_number"):
-        return f"{key} must be a finite number, got {value!r}"
+        return f"{key} must be a finite number, got {short(value)}"
     msg = str(err["msg"]).removeprefix("Value error, ")
     return f"{key}: {msg}"
 
@@ -69,8 +75,33 @@ def validate(model: type[BaseModel], data: Any, prefix: tuple, locate: Locator) 
     except ValidationError as exc:
         messages = []
         for err in exc.errors():
-            loc = tuple(x for x in err["loc"] if not str(x).startswith("function-"))
+            loc = _keys(data, err["loc"], keep_last=err["type"] == "missing")
             path = (*prefix, *loc)
             key = ".".join(map(str, path))
-            messages.append(f"{locate(*path)}: {_fix(err, key, _fields_at(model, loc))}")
+            message = f"{locate(*path)}: {_fix(err, key, _fields_at(model, loc))}"
+            if message not in messages:
+                messages.append(message)
         raise ConfigError("\n".join(messages)) from None
+
+
+def _keys(data: Any, loc: tuple, keep_last: bool = False) -> tuple:
+    """The keys of an error's location: pydantic's tags of validators (``function-...``) and
+    of the members of a union (``Described``, ``str``, ``list[str]``) dropped, unless the data
+    has such a key (or it is the missing key, ``keep_last``)."""
+    out: list[Any] = []
+    node = data
+    for i, part in enumerate(loc):
+        if isinstance(node, dict) and part in node:
+            node = node[part]
+        elif isinstance(node, list) and isinstance(part, int) and 0 <= part < len(node):
+            node = node[part]
+        elif isinstance(part, str) and _TAG.fullmatch(part) and not (
+                keep_last and i == len(loc) - 1):
+            continue
+        else:
+            node = None
+        out.append(part)
+    return tuple(out)
+
+
+_TAG = re.compile(r"function-.*|[A-Z]\w*|str|int|float|bool|none|\w+\[.*\]")

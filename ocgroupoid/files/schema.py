@@ -15,13 +15,46 @@ from ..model.values import Strict, number, positive
 from ..nlp.schemes import SCHEME_NAMES
 
 
+#: the final times a problem file may state (seconds, or the model's unit of time): beyond
+#: them the step h = T/N under- or overflows the scaling of the NLP (SVD and LAPACK failures)
+T_RANGE = (1e-6, 1e6)
+#: perturbed starts of ``solver.multistart`` (each is a full IPOPT solve) and coarse grids
+#: of ``solver.continuation``
+MULTISTART_MAX = 1000
+CONTINUATION_MAX = 8
+
+
+def _time(v: Any, what: str = "T") -> float:
+    """A number of seconds within :data:`T_RANGE`."""
+    x = positive(v, what)
+    lo, hi = T_RANGE
+    if not lo <= x <= hi:
+        raise ValueError(f"{what} = {x:g} is outside [{lo:g}, {hi:g}], the range of times the "
+                         "NLP's scaling tolerates; rescale the units of time (and the "
+                         "parameters with them)")
+    return x
+
+
 def _final_time(v: Any) -> Any:
-    """A positive number, or ``free`` (a decision variable)."""
+    """A time within :data:`T_RANGE`, or ``free`` (a decision variable)."""
     if v == "free":
         return v
     if isinstance(v, str):
         raise ValueError(f"T must be a number > 0 or free, got {v!r}")
-    return positive(v, "T")
+    return _time(v, "T")
+
+
+def _multistart(v: Any) -> bool | int:
+    """true, false, or a count of perturbed starts up to :data:`MULTISTART_MAX` (no text)."""
+    if isinstance(v, bool):
+        return v
+    if not isinstance(v, int):
+        raise ValueError(f"multistart is true, false or a number of perturbed starts, got "
+                         f"{v!r}{' (text: drop the quotes)' if isinstance(v, str) else ''}")
+    if not 0 <= v <= MULTISTART_MAX:
+        raise ValueError(f"multistart = {v} is outside 0..{MULTISTART_MAX}: each start is a "
+                         "full IPOPT solve; a few (true: 3) find the usual local minima")
+    return v
 
 
 def _nonnegative(v: Any, what: str = "value") -> float:
@@ -32,6 +65,7 @@ def _nonnegative(v: Any, what: str = "value") -> float:
 
 
 PositiveNumber = Annotated[float, BeforeValidator(positive)]
+Time = Annotated[float, BeforeValidator(_time)]
 Weight = Annotated[float, BeforeValidator(_nonnegative)]
 
 
@@ -39,11 +73,12 @@ class Horizon(Strict):
     """Final time (fixed, or free within bounds) and number of intervals."""
 
     T: Annotated[Any, BeforeValidator(_final_time)] = Field(
-        description="final time (> 0), or free: a decision variable within [T_min, T_max]")
+        description=f"final time (in [{T_RANGE[0]:g}, {T_RANGE[1]:g}]), or free: a decision "
+        "variable within [T_min, T_max]")
     N: Annotated[int, Field(strict=True, ge=2, description="number of intervals (>= 2)")]
-    T_min: PositiveNumber | None = Field(None, description="lower bound of a free T")
-    T_max: PositiveNumber | None = Field(None, description="upper bound of a free T")
-    T_guess: PositiveNumber | None = Field(
+    T_min: Time | None = Field(None, description="lower bound of a free T")
+    T_max: Time | None = Field(None, description="upper bound of a free T")
+    T_guess: Time | None = Field(
         None, description="initial guess of a free T (default: the middle of [T_min, T_max])")
 
     @model_validator(mode="after")
@@ -92,10 +127,13 @@ class SolverSection(Strict):
 
     ipopt: dict[str, str | int | float] = Field(
         default_factory=dict, description="options passed to IPOPT (e.g. tol, max_iter)")
-    multistart: bool | Annotated[int, Field(strict=True, ge=0)] = Field(
-        False, description="true, or the number of perturbed starts on top of the geodesics")
+    multistart: Annotated[bool | int, BeforeValidator(_multistart)] = Field(
+        True, description="true (the default), false (the first geodesic only), or the "
+        "number of perturbed starts on top of the geodesics and the model's guesses "
+        f"(at most {MULTISTART_MAX})")
     continuation: list[Annotated[int, Field(strict=True, ge=2)]] = Field(
-        default_factory=list, description="coarser N solved first, e.g. [16, 32]")
+        default_factory=list, max_length=CONTINUATION_MAX,
+        description=f"coarser N solved first, e.g. [16, 32] (at most {CONTINUATION_MAX})")
 
 
 class OutputSection(Strict):

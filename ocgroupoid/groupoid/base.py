@@ -181,6 +181,10 @@ class Factor(ABC):
     def distance(self, s: np.ndarray) -> float:
         """Distance of a flattened numeric state from the manifold."""
 
+    def distances(self, states: np.ndarray) -> np.ndarray:
+        """:meth:`distance` of every row of ``states``."""
+        return np.array([self.distance(s) for s in states])
+
     @property
     def shown_shape(self) -> tuple[int, ...]:
         """Shape of a state as users see it (a rotation: its 3 x 3 matrix)."""

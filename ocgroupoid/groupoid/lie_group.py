@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from functools import cached_property
 from typing import Any
 
 import casadi as ca
@@ -111,12 +112,26 @@ class LieGroupFactor(Factor):
         """A user's value in any form the group accepts (:meth:`StateForm.parse`)."""
         return self.form.parse(value)
 
+    @cached_property
+    def _matrix(self) -> ca.Function:
+        s = ca.SX.sym("s", self.state_size)
+        return ca.Function("matrix", [s], [self.form.matrix(s)])
+
     def matrix(self, s: np.ndarray) -> np.ndarray:
-        """The group matrix of a numeric state (not renormalised: drift stays visible)."""
-        return np.asarray(self.form.matrix(np.asarray(s, dtype=float)))
+        """The group matrix of a numeric state (not renormalised: drift stays visible),
+        through a compiled Function: diagnostics call it at every node."""
+        return np.array(self._matrix(np.asarray(s, dtype=float)))
 
     def distance(self, s: np.ndarray) -> float:
         return self.group.distance_from_group(self.matrix(s))
+
+    def distances(self, states: np.ndarray) -> np.ndarray:
+        """:meth:`distance` of every row, the matrices evaluated in one mapped call."""
+        n = len(states)
+        M = np.array(self._matrix.map(n)(np.asarray(states, dtype=float).T))
+        r, c = self.form.shown_shape
+        return np.array([self.group.distance_from_group(M[:, i * c:(i + 1) * c])
+                         for i in range(n)])
 
     @property
     def shown_shape(self) -> tuple[int, ...]:

@@ -290,7 +290,11 @@ def from_quaternion(q: Sequence[float]) -> np.ndarray:
     q = np.asarray(q, dtype=float)
     if q.shape != (4,) or not np.all(np.isfinite(q)):
         raise ConfigError(f"a quaternion is 4 finite numbers [w, x, y, z], got {q.tolist()}")
-    n = np.linalg.norm(q)
+    with np.errstate(over="ignore"):
+        n = np.linalg.norm(q)
+    if not np.isfinite(n):  # e.g. [1e300, 1e300, 1e300, 1e300]: q / inf would be identity
+        raise ConfigError(f"the quaternion's norm overflows (|q| beyond 1.8e+308), got "
+                          f"{q.tolist()}; scale it down, e.g. divide by its largest component")
     if n < 1e-12:
         raise ConfigError("the zero quaternion is not a rotation; give [1, 0, 0, 0] for none")
     w, x, y, z = q / n
@@ -301,11 +305,20 @@ def from_quaternion(q: Sequence[float]) -> np.ndarray:
     ])
 
 
+ANGLE_MAX = 1e6  # rad: beyond, an angle has lost the digits that place it on the circle
+
+
 def from_rotvec(v: Sequence[float]) -> np.ndarray:
     """exp(hat(v)) of a rotation vector (axis times angle)."""
     v = np.asarray(v, dtype=float)
     if v.shape != (3,) or not np.all(np.isfinite(v)):
         raise ConfigError(f"a rotation vector is 3 finite numbers, got {np.asarray(v).tolist()}")
+    with np.errstate(over="ignore"):
+        angle = float(np.linalg.norm(v))
+    if not angle <= ANGLE_MAX:  # also an overflowing norm: sin, cos of it mean nothing
+        raise ConfigError(f"the rotation angle {angle:g} rad is beyond {ANGLE_MAX:g} rad, "
+                          "where its sine and cosine are meaningless; reduce it modulo "
+                          "2 pi")
     return np.asarray(exp(v))
 
 

@@ -35,6 +35,19 @@ from .mechanics import Mechanics, split
 from .values import check_horizon, check_vector, number
 
 
+def sx(expr: Any, what: str) -> ca.SX:
+    """``expr`` as a CasADi SX expression; an MX one (``ca.MX.sym``) or anything else that is
+    not an expression is refused with the fix instead of CasADi's NotImplementedError."""
+    if isinstance(expr, ca.MX):
+        raise ConfigError(f"{what} is a CasADi MX expression; a Problem is built from SX: "
+                          "declare symbols with ca.SX.sym, or use the problem's own symbols "
+                          "(pb.velocity, pb.parameter, ...)")
+    try:
+        return ca.SX(expr)
+    except (NotImplementedError, TypeError, RuntimeError, ValueError):
+        raise ConfigError(f"{what} must be a CasADi SX expression or numbers, got "
+                          f"{type(expr).__name__}") from None
+
 
 @dataclass(frozen=True)
 class GuessContext:
@@ -65,6 +78,21 @@ class Inequality:
     expr: ca.SX
     lower: ca.SX
     upper: ca.SX
+
+
+@dataclass(frozen=True)
+class Description:
+    """What a reported quantity means (:meth:`Problem.describe`): a meaning, and one label and
+    one unit per component ("" where no unit was declared)."""
+
+    kind: str  # the section of the labels: time, states, velocities, controls, multipliers
+    meaning: str
+    components: tuple[str, ...]
+    units: tuple[str, ...]
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"meaning": self.meaning, "components": list(self.components),
+                "units": list(self.units)}
 
 
 @dataclass
@@ -121,6 +149,7 @@ class Problem:
         self.weights = {"effort": 1.0, "time": 0.0}
         self.T_free = False
         self.T_bounds: tuple[float, float] = (0.0, np.inf)
+        self.descriptions: dict[str, Description] = {}  # names and units (describe)
 
     @property
     def end_velocities(self) -> bool:
@@ -228,7 +257,8 @@ class Problem:
             raise ConfigError("mechanics() builds a second-order problem; use order=2")
         if self.dynamics is not None:
             raise ConfigError("mechanics() was already called for this problem")
-        lagrangian = ca.SX(lagrangian)
+        lagrangian = sx(lagrangian, "the Lagrangian")
+        input_matrix = None if input_matrix is None else sx(input_matrix, "the input matrix")
         self._check_symbols(lagrangian, "the Lagrangian", rates=False)  # reduced: no R
         mech = split(self.groupoid, lagrangian, self.q, self.y, self.dy,
                      self._indices(actuated), input_matrix)
@@ -242,7 +272,7 @@ class Problem:
     def minimize(self, integrand: ca.SX) -> None:
         """Set the running cost: ``int integrand dt`` (Ltilde for order 2, l for order 1); it
         may depend on the node states (:meth:`node_state`), e.g. to track an attitude."""
-        integrand = ca.SX(integrand)
+        integrand = sx(integrand, "the cost integrand")
         if integrand.shape != (1, 1):
             raise DimensionError(f"the cost integrand is a scalar, got shape {integrand.shape}")
         self._check_symbols(integrand, "cost", states=True)
@@ -250,7 +280,7 @@ class Problem:
 
     def terminal_cost(self, expr: ca.SX) -> None:
         """Add a Mayer term ``expr(s_N, y_N)`` on the final node (order 1: ``expr(s_N)``)."""
-        expr = ca.SX(expr)
+        expr = sx(expr, "the terminal cost")
         if expr.shape != (1, 1):
             raise DimensionError(f"a terminal cost is a scalar, got shape {expr.shape}")
         self._check_symbols(expr, "terminal cost", states=True, rates=False,
@@ -283,7 +313,7 @@ class Problem:
         and ``upper`` are numbers, lists (per component), None (that side open, also per
         component) or expressions of the parameters (they change without a rebuild).
         """
-        expr = ca.vec(ca.SX(expr))
+        expr = ca.vec(sx(expr, f"bound {name or ''}".strip()))
         self._check_symbols(expr, "bound", states=True)
         n = expr.numel()
         label = name or f"bound{len(self.inequalities) + 1}"
@@ -301,7 +331,7 @@ class Problem:
             if v is None:
                 return ca.SX(inf)
             if isinstance(v, (ca.SX, ca.MX)):
-                return ca.vec(ca.SX(v))
+                return ca.vec(sx(v, f"a side of bound {name!r}"))
             if isinstance(v, (float, np.floating)) and np.isinf(v):
                 return ca.SX(float(v))  # +-inf: that side open
             return ca.SX(number(v, f"bound {name!r}"))
@@ -318,7 +348,7 @@ class Problem:
 
     def subject_to(self, expr: ca.SX, name: str = "c") -> None:
         """Add equality constraints ``expr(q, y[, dy]) = 0`` along the trajectory."""
-        expr = ca.vec(ca.SX(expr))
+        expr = ca.vec(sx(expr, f"constraint {name}"))
         self._check_symbols(expr, f"constraint {name}")
         if any(n == name for n, _ in self.constraints):
             raise ConfigError(f"constraint name {name!r} used twice")
@@ -343,7 +373,7 @@ class Problem:
 
     def _end_expression(self, name: str, expr: ca.SX, where: list[tuple[str, ca.SX]],
                         what: str) -> None:
-        expr = ca.vec(ca.SX(expr))
+        expr = ca.vec(sx(expr, f"{what} {name}"))
         args = [self.q, self.y, self.P] if self.order == 2 else [self.q, self.P]
         allowed = {v.name() for v in ca.symvar(ca.vertcat(*args))}
         foreign = [v.name() for v in ca.symvar(expr) if v.name() not in allowed]
@@ -357,7 +387,7 @@ class Problem:
 
     def report_controls(self, expr: ca.SX, names: Sequence[str]) -> None:
         """Declare which expressions are the controls the Solution reports."""
-        expr = ca.vec(ca.SX(expr))
+        expr = ca.vec(sx(expr, "the controls"))
         if len(names) != expr.numel():
             raise DimensionError(f"{expr.numel()} controls but {len(names)} names")
         self._check_symbols(expr, "controls")
@@ -456,3 +486,184 @@ class Problem:
         """Register an alternative discretisation of the constraints of the order2 scheme:
         ``builder(node)`` gets a :class:`ocgroupoid.nlp.schemes.Node`."""
         self.rules[name] = builder
+
+    # -- names and units of what a Solution reports (plots, solution files) ----------------
+
+    def describe(self, name: str, meaning: str | None = None,
+                 unit: str | Sequence[str] | None = None,
+                 components: Sequence[str] | None = None) -> None:
+        """Say what ``name`` means and its unit, for plots and solution files::
+
+            pb.describe("Omega", "body angular velocity", "rad/s",
+                        components=["about body axis 1", "about body axis 2", "about body axis 3"])
+
+        ``name`` is a state, a velocity, a control, ``u`` (all the controls), a constraint
+        (its multipliers) or ``t`` (the time axis; "s" unless declared). ``unit`` is one
+        string for every component or a list of one per component; ``components`` labels
+        each component (the legend). A vector state's components are its entries; a group
+        state's are its tangent coordinates, in its velocity's order (SO(3): 3 angles; SE(3):
+        3 angles, then the position; SE(2): the heading, then x, y). A later call for the same
+        name replaces an earlier one.
+        """
+        kind, n = self._quantity(name)
+        what = f"describe({name!r})"
+        if meaning is not None and not isinstance(meaning, str):
+            raise ConfigError(f"{what}: the meaning is a string, got {meaning!r}")
+        meaning = meaning or name
+        units = self._per_component(unit, n, "unit", name, repeat=True) or [""] * n
+        labels = self._per_component(components, n, "component", name, repeat=False) or \
+            ([meaning] if n == 1 else [f"{name}{i + 1}" for i in range(n)])
+        if kind == "time" and components is not None:
+            raise ConfigError(f"{what}: the time axis has no components; give a meaning and "
+                              "a unit")
+        if len(set(labels)) != len(labels):
+            raise ConfigError(f"{what}: component labels must differ (one legend entry "
+                              f"each), got {labels}")
+        self.descriptions[name] = Description(kind, meaning, tuple(labels), tuple(units))
+
+    def _quantity(self, name: str) -> tuple[str, int]:
+        """The labels section ``name`` belongs to and its number of components."""
+        G = self.groupoid
+        controls = [n for n, _ in self.controls]
+        constraints = {n: c.numel() for n, c in self.constraints}
+        if not isinstance(name, str):
+            raise ConfigError(f"describe: a name is a string, got {name!r}")
+        if name == "t":
+            return "time", 1
+        if name in G.state_names:
+            _, f = G.by_state(name)
+            shape = f.shown_shape  # a matrix: a group element, described in its tangent
+            return "states", f.algebra_dim if len(shape) == 2 else int(np.prod(shape))
+        if name in G.velocity_names:
+            return "velocities", G.by_velocity(name)[1].algebra_dim
+        if name in controls:
+            return "controls", 1
+        if name == "u" and controls:
+            return "controls", len(controls)
+        if name in constraints:
+            return "multipliers", constraints[name]
+        raise ConfigError(
+            f"describe: unknown name {name!r}; known: states {G.state_names}, velocities "
+            f"{G.velocity_names}, controls {controls + (['u'] if controls else [])}, "
+            f"constraints {list(constraints)}, and t (time). Controls and constraints exist "
+            "once mechanics(), report_controls() or subject_to() declared them: describe "
+            "them after")
+
+    @staticmethod
+    def _per_component(value: Any, n: int, what: str, name: str, repeat: bool
+                       ) -> list[str] | None:
+        """None, or n strings: a list of n, or (``repeat``) one string for all of them."""
+        where = f"describe({name!r})"
+        if value is None:
+            return None
+        if isinstance(value, str):
+            if repeat or n == 1:
+                return [value] * n
+            raise ConfigError(f"{where}: {name} has {n} components, so the {what} labels are "
+                              f"a list of {n}, got the string {value!r}")
+        items = list(value) if isinstance(value, (list, tuple)) else None
+        if items is None or not all(isinstance(v, str) for v in items):
+            raise ConfigError(f"{where}: the {what}s are strings (a list of {n}), got "
+                              f"{value!r}")
+        if len(items) != n:
+            hint = "one string for all of them or " if repeat else ""
+            raise ConfigError(f"{where}: {name} has {n} component{'s' * (n != 1)}, got "
+                              f"{len(items)} {what}s {items}; give {hint}a list of {n}")
+        return items
+
+    def labels(self, P: Any = None) -> dict[str, Any]:
+        """Names and units of everything a Solution reports, JSON-ready (``Solution.labels``).
+
+        ``time`` (meaning, unit, and ``free: [T_min, T_max]`` for a free horizon); the
+        described ``states``, ``velocities`` and ``multipliers`` (name -> meaning, components,
+        units); ``controls`` (one label and unit per control, in order); ``final``: which
+        final states and velocities are prescribed (True, False, or per component);
+        ``bounds``: one entry per bound row (name, component, the quantity it limits if it is
+        a control, a velocity or a vector state component, and its sides at the parameter
+        values P, default the declared ones; None where a side is open).
+        """
+        d = self.descriptions
+        time = d.get("t")
+        out: dict[str, Any] = {"time": {"meaning": time.meaning if time else "time",
+                                        "unit": time.units[0] if time else "s"}}
+        if self.T_free:
+            out["time"]["free"] = [_finite(v) for v in self.T_bounds]
+        for kind in ("states", "velocities", "multipliers"):
+            out[kind] = {n: v.as_dict() for n, v in d.items() if v.kind == kind}
+        names = [n for n, _ in self.controls]
+        if names:
+            group = d.get("u") if "u" not in names else None
+            comps = list(group.components) if group else list(names)
+            units = list(group.units) if group else [""] * len(names)
+            for j, n in enumerate(names):
+                if n in d and d[n].kind == "controls":
+                    comps[j], units[j] = d[n].components[0], d[n].units[0]
+            one = d.get(names[0]) if len(names) == 1 else None  # a single control
+            meaning = group.meaning if group else one.meaning if one else "controls"
+            out["controls"] = {"meaning": meaning, "components": comps, "units": units}
+        out["final"] = {**{f.state: _prescribed(self.end.states.get(f.state))
+                           for f in self.groupoid.factors},
+                        **{f.velocity: _prescribed(self.end.velocities.get(f.velocity))
+                           for f in self.groupoid.factors if self.end_velocities}}
+        out["bounds"] = self._bound_labels(self.parameter_values() if P is None else P)
+        return out
+
+    def _bound_labels(self, P: Any) -> list[dict[str, Any]]:
+        rows: list[dict[str, Any]] = []
+        for b in self.inequalities:
+            sides = ca.vertcat(b.lower, b.upper)
+            lo, hi = np.split(np.array(ca.Function("sides", [self.P], [sides])(P)).ravel(), 2)
+            for i, e in enumerate(ca.vertsplit(b.expr)):
+                row = {"name": b.name, "component": i, "lower": _finite(lo[i]),
+                       "upper": _finite(hi[i]), "parametric": False, **self._limited(e)}
+                for key, side in (("lower", b.lower[i]), ("upper", b.upper[i])):
+                    if self.P.numel() and ca.depends_on(side, self.P):
+                        row["parametric"] = True
+                        row[f"{key}_affine"] = self._affine(side)
+                rows.append(row)
+        return rows
+
+    def _affine(self, side: ca.SX) -> dict[str, Any] | None:
+        """``side = constant + sum over parameters of gradient . value`` when it is affine in
+        the parameters (``-tau_max``), so that a reader evaluates it at other values; else
+        None."""
+        if not ca.is_linear(side, self.P):
+            return None
+        grad, c0 = ca.Function("affine", [self.P], [ca.jacobian(side, self.P), side])(
+            np.zeros(self.P.numel()))
+        g = np.array(grad).ravel()
+        return {"constant": float(c0), "gradient": {
+            name: g[sl].tolist() for name, sl in self.parameter_slices.items() if g[sl].any()}}
+
+    def _limited(self, e: ca.SX) -> dict[str, Any]:
+        """The reported quantity a bound row limits: a control, or a component of a velocity
+        or of a vector state; ``quantity`` None for any other expression."""
+        G = self.groupoid
+        for j, (n, c) in enumerate(self.controls):
+            if ca.is_equal(e, c, 64):
+                return {"quantity": "controls", "of": n, "index": j}
+        if e.is_symbolic():
+            for f, vs in zip(G.factors, G.velocity_layout.slices):
+                for k in range(vs.start, vs.stop):
+                    if ca.is_equal(e, self.y[k]):
+                        return {"quantity": "velocities", "of": f.velocity, "index": k - vs.start}
+            for f, qs in zip(G.factors, G.base_layout.slices):
+                for k in range(qs.start, qs.stop):
+                    if f.componentwise and ca.is_equal(e, self.q[k]):
+                        return {"quantity": "states", "of": f.state, "index": k - qs.start}
+        return {"quantity": None, "of": None, "index": None}
+
+
+def _finite(v: Any) -> float | None:
+    """A JSON number, None for an infinite (open) side."""
+    v = float(v)
+    return v if np.isfinite(v) else None
+
+
+def _prescribed(value: Any) -> bool | list[bool]:
+    """Whether a boundary value prescribes its state: wholly, not at all, or per component."""
+    if value is None:
+        return False
+    if isinstance(value, (list, tuple)) and any(v is None for v in value):
+        return [v is not None for v in value]
+    return True

@@ -7,6 +7,7 @@ the problem files' sections. Every message says what is wrong and how to write i
 
 from __future__ import annotations
 
+import reprlib
 from functools import partial
 from typing import Annotated, Any
 
@@ -17,11 +18,26 @@ from ..errors import ConfigError
 from ..lie import se3, so3
 
 
+_REPR = reprlib.Repr()
+_REPR.maxlist = _REPR.maxtuple = 6
+_REPR.maxdict, _REPR.maxlevel, _REPR.maxstring, _REPR.maxother = 4, 2, 60, 60
+
+
+def short(value: Any) -> str:
+    """``repr(value)`` cut to a line for messages: a list that an alias expands to thousands
+    of values, or a long text, is shown by its beginning."""
+    return _REPR.repr(value)
+
+
 def number(v: Any, what: str = "value") -> float:
     """A finite real number (booleans and text are refused)."""
     if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, float, np.integer, np.floating)):
-        raise ConfigError(f"{what} must be a number, got {v!r}; write e.g. 1.0")
-    x = float(v)
+        raise ConfigError(f"{what} must be a number, got {short(v)}; write e.g. 1.0")
+    try:
+        x = float(v)
+    except OverflowError:  # an integer beyond the range of a float
+        raise ConfigError(f"{what} is an integer too large for a float (beyond 1.8e+308); "
+                          "write a smaller number") from None
     if not np.isfinite(x):
         raise ConfigError(f"{what} must be finite, got {v!r}; write a finite number")
     return x
@@ -45,7 +61,7 @@ def check_vector(v: Any, n: int, allow_none: bool = False, positive: bool = Fals
     if n == 1 and not isinstance(v, (list, tuple)) and v is not None:
         v = [v]
     if not isinstance(v, (list, tuple)) or len(v) != n:
-        raise ConfigError(f"{prefix}expected a list of {n} numbers, got {v!r}")
+        raise ConfigError(f"{prefix}expected a list of {n} numbers, got {short(v)}")
     out: list[float | None] = []
     for i, c in enumerate(v):
         if c is None:
@@ -116,4 +132,4 @@ UnitVector3 = Annotated[list, BeforeValidator(unit_vector)]
 __all__ = ["number", "positive", "check_vector", "check_horizon", "unit_vector", "Strict",
            "Number", "PositiveNumber", "Horizon", "vector", "Vector3", "Vector3Free",
            "Vector2", "Vector2Free", "Vector6Free", "Positive3", "Positive2", "Rotation", "Pose",
-           "UnitVector3"]
+           "UnitVector3", "short"]

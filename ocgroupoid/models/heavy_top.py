@@ -67,6 +67,17 @@ def heavy_top(Ibar: Sequence[float] = IBAR, J: Sequence[float] = ROTOR, mgl: flo
     u = pb.mechanics(l, actuated="dtheta", control_names=["u1", "u2"])
     pb.minimize(0.5 * ca.sumsqr(u))
     pb.conserved("Pi.Gamma", ca.dot(ca.gradient(l, Omega), Gamma))
+    axes = [f"body axis {i}" for i in (1, 2, 3)]
+    pb.describe("Gamma", "upward vertical in the body frame", "1",
+                components=[f"Γ{i} along {a}" for i, a in zip("123", axes)])
+    pb.describe("theta", "rotor angles", "rad", components=["rotor 1", "rotor 2"])
+    pb.describe("Omega", "body angular velocity", "rad/s",
+                components=[f"Ω{i} about {a}" for i, a in zip("123", axes)])
+    pb.describe("dtheta", "rotor rates relative to the body", "rad/s",
+                components=["rotor 1", "rotor 2"])
+    pb.describe("u", "rotor torques", "N m", components=["u1 on rotor 1", "u2 on rotor 2"])
+    pb.describe("Phi", "the top's equations dΠ/dt = Π × Ω + mgl Γ × e3", "N m",
+                components=[f"λ{i} about {a}" for i, a in zip("123", axes)])
     pb.rule("lie_poisson", lie_poisson)
     pb.guesses(rotor_guesses)
     pb.initial(Gamma=Gamma0, Omega=Omega0, theta=theta0, dtheta=dtheta0)

@@ -80,6 +80,17 @@ def plate_ball(r: float = 1.0, Omega_p: float = 0.0, c: float = 0.0, T: float = 
                              spin - w[2]),  # seed phi^3 / h
                   name="rolling")
     pb.report_controls(v, ["dx", "dy"])
+    pb.describe("xy", "position of the ball's centre", "m", components=["x", "y"])
+    pb.describe("R", "attitude of the ball", "rad",
+                components=["about x", "about y", "about z"])
+    pb.describe("v", "velocity of the centre", "m/s", components=["dx/dt", "dy/dt"])
+    pb.describe("w", "angular velocity of the ball (spatial)", "rad/s",
+                components=["w_x", "w_y", "w_z"])
+    pb.describe("u", "velocity of the centre (the controls)", "m/s",
+                components=["dx/dt", "dy/dt"])
+    pb.describe("rolling", "rolling constraints", ["m/s", "m/s", "m²/s"],  # cost / row
+                components=["λ1: dy/dt + r w_x = Ω_p x", "λ2: dx/dt - r w_y = -Ω_p y",
+                            "λ3: w_z = c"])
     pb.initial(xy=xy0, R=R0)
     pb.final(xy=xyT, R=RT)
     pb.horizon(T)

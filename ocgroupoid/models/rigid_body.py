@@ -38,6 +38,12 @@ def rigid_body(inertia: Sequence[float] = INERTIA, T: float = 5.0, R0: Any = np.
     u = pb.mechanics(0.5 * ca.dot(Omega, I * Omega), actuated="Omega",
                      input_matrix=ca.diag(I), control_names=["u1", "u2", "u3"])
     pb.minimize(0.5 * ca.sumsqr(u))
+    axes = [f"body axis {i}" for i in (1, 2, 3)]
+    pb.describe("R", "attitude", "rad", components=[f"about {a}" for a in axes])
+    pb.describe("Omega", "body angular velocity", "rad/s",
+                components=[f"Ω{i} about {a}" for i, a in zip("123", axes)])
+    pb.describe("u", "angular acceleration u = torque / inertia", "rad/s²",
+                components=[f"u{i} about {a}" for i, a in zip("123", axes)])
     pb.initial(R=R0, Omega=Omega0)
     pb.final(R=RT, Omega=OmegaT)
     pb.horizon(T)

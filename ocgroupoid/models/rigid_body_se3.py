@@ -56,6 +56,15 @@ def free_flyer(J: Sequence[float] = INERTIA, m: float = MASS, T: float = 5.0,
     l = 0.5 * ca.dot(omega, inertia * omega) + 0.5 * mass * ca.dot(v, v)
     wrench = pb.mechanics(l, actuated="xi", control_names=CONTROLS)
     pb.minimize(0.5 * ca.sumsqr(wrench))
+    axes = ("body x", "body y", "body z")
+    pb.describe("g", "pose", ["rad"] * 3 + ["m"] * 3,
+                components=[*(f"about {a}" for a in axes), "x", "y", "z"])
+    pb.describe("xi", "body twist", ["rad/s"] * 3 + ["m/s"] * 3,
+                components=[*(f"ω{i} about {a}" for i, a in zip("123", axes)),
+                            *(f"v{i} along {a}" for i, a in zip("123", axes))])
+    pb.describe("u", "body wrench", ["N m"] * 3 + ["N"] * 3,
+                components=[*(f"torque τ{i} about {a}" for i, a in zip("123", axes)),
+                            *(f"force f{i} along {a}" for i, a in zip("123", axes))])
     pb.initial(g=g0, xi=xi0)
     pb.final(g=gT, xi=xiT)
     pb.horizon(T)

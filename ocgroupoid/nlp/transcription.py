@@ -16,6 +16,7 @@ ParameterValues`.
 
 from __future__ import annotations
 
+import re
 import time
 from dataclasses import dataclass
 from functools import cached_property
@@ -34,6 +35,7 @@ from .layout import Layout, Masks
 from .parameters import ParameterValues
 from .schemes import DEFAULT_RULE, DEFAULT_SCHEME, SCHEME_NAMES, make_scheme
 from .schemes.order2 import columns, stage_function
+from .watch import Listener, Watch
 
 DEFAULT_IPOPT: dict[str, Any] = {
     "tol": 1e-10,
@@ -127,6 +129,15 @@ class RawResult:
     solve_seconds: float
 
 
+def casadi_name(name: str) -> str:
+    """A valid CasADi Function name made from any problem name (a file's stem such as
+    ``my-slew`` or ``2 slews``): runs of other characters than ASCII letters and digits become
+    one ``_``, and a name that does not start with a letter gets ``p_`` in front
+    (``my_slew``, ``p_2_slews``). The problem keeps its own name for display."""
+    text = re.sub(r"[^A-Za-z0-9]+", "_", name[:64]).strip("_")
+    return text if text[:1].isalpha() else f"p_{text}".rstrip("_")
+
+
 class Transcription:
     """The compiled NLP of (problem, discretisation); solve it for any parameters p."""
 
@@ -155,9 +166,12 @@ class Transcription:
         t2 = time.perf_counter()
         self.ng = int(fns["g"].numel())
         self.nlp = {"x": x, "p": p, "f": fns["f"], "g": fns["g"]}
+        #: the name of the IPOPT Function (and of its exported C code): safe for CasADi
+        self.function_name = f"{casadi_name(problem.name)}_N{self.N}"
+        self._options = nlpsol_options(ipopt, fns)
+        self._watch: Watch | None = None
         try:
-            self.solver = ca.nlpsol(f"{problem.name}_N{self.N}", "ipopt", self.nlp,
-                                    nlpsol_options(ipopt, fns))
+            self.solver = ca.nlpsol(self.function_name, "ipopt", self.nlp, self._options)
         except RuntimeError as err:
             raise ConfigError(f"IPOPT rejected the options {ipopt}: {err}") from None
         t3 = time.perf_counter()
@@ -440,15 +454,31 @@ class Transcription:
 
     # -- solving ------------------------------------------------------------------------
 
-    def solve(self, guess: Guess, p: np.ndarray | None = None) -> RawResult:
-        """Run IPOPT from ``guess`` with parameters ``p`` (default: the problem's)."""
+    @cached_property
+    def watched_solver(self) -> ca.Function:
+        """:attr:`solver` with an iteration callback (:mod:`~ocgroupoid.nlp.watch`), built on
+        first use (the plain :attr:`solver` stays free of Python, for the C export)."""
+        self._watch = Watch(self.nx, self.ng, self.np)
+        return ca.nlpsol(self.function_name, "ipopt", self.nlp,
+                         {**self._options, "iteration_callback": self._watch})
+
+    def solve(self, guess: Guess, p: np.ndarray | None = None,
+              listener: Listener | None = None) -> RawResult:
+        """Run IPOPT from ``guess`` with parameters ``p`` (default: the problem's);
+        ``listener(iteration, objective, infeasibility)`` hears every iteration and stops
+        IPOPT by returning True (status ``User_Requested_Stop``)."""
         p = self.pack() if p is None else np.asarray(p, dtype=float)
         x0 = self.point(guess, p)
         lbg, ubg, lbx, ubx = self.bounds_function(p)
+        solver = self.solver
+        if listener is not None:
+            solver = self.watched_solver
+            assert self._watch is not None
+            self._watch.start(listener, np.array(lbg).ravel(), np.array(ubg).ravel())
         t0 = time.perf_counter()
-        r = self.solver(x0=x0, p=p, lbg=lbg, ubg=ubg, lbx=lbx, ubx=ubx)
+        r = solver(x0=x0, p=p, lbg=lbg, ubg=ubg, lbx=lbx, ubx=ubx)
         seconds = time.perf_counter() - t0
-        stats = self.solver.stats()
+        stats = solver.stats()
         status = str(stats["return_status"])
         iterations = 0 if status == "Not_Enough_Degrees_Of_Freedom" else int(stats["iter_count"])
         return RawResult(guess.label, np.array(r["x"]).ravel(), p, np.array(r["lam_g"]).ravel(),

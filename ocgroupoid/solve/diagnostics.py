@@ -15,6 +15,7 @@
 from __future__ import annotations
 
 from typing import Any
+from weakref import WeakKeyDictionary
 
 import casadi as ca
 import numpy as np
@@ -23,6 +24,15 @@ from ..nlp.assembly import Kind
 from ..nlp.transcription import RawResult, Transcription
 from . import mesh
 from .replay import Replay, terminal_errors
+
+_replays: WeakKeyDictionary[Transcription, Replay] = WeakKeyDictionary()
+
+
+def replay_of(tr: Transcription) -> Replay:
+    """The Replay of a transcription, built once (its dynamics and compiled integrators)."""
+    if tr not in _replays:
+        _replays[tr] = Replay(tr)
+    return _replays[tr]
 
 
 def euler_lagrange_residual(tr: Transcription, x: np.ndarray, p: np.ndarray,
@@ -60,7 +70,7 @@ def conserved_values(tr: Transcription, states: np.ndarray, velocities: np.ndarr
 def manifold_distance(tr: Transcription, states: np.ndarray) -> dict[str, float]:
     """Largest distance of the node states from each factor's manifold."""
     G = tr.problem.groupoid
-    return {f.state: max(f.distance(row[ss]) for row in states)
+    return {f.state: float(np.max(f.distances(states[:, ss])))
             for f, ss in zip(G.factors, G.state_layout.slices)}
 
 
@@ -125,5 +135,5 @@ def diagnose(tr: Transcription, x: np.ndarray, p: np.ndarray, lam_g: np.ndarray,
         d["replay"] = {"available": False,
                        "reason": "not replayed: IPOPT did not solve, the controls are no answer"}
     elif replay:
-        d["replay"] = Replay(tr).run(out, ppoly, p)
+        d["replay"] = replay_of(tr).run(out, ppoly, p)
     return d

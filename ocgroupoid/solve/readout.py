@@ -20,11 +20,14 @@ from ..nlp.transcription import RawResult, Transcription
 from .diagnostics import diagnose
 from .hints import hint_for
 from .solution import Solution
+from .verdict import REPLAY_TOLERANCE, check_tolerance, verdict
 
 
 def make_solution(tr: Transcription, r: RawResult, minima: Sequence[Any],
-                  replay: bool = True) -> Solution:
-    """Assemble a Solution (trajectory, controls, multipliers, diagnostics) from a result."""
+                  replay: bool = True, ipopt: dict[str, Any] | None = None,
+                  replay_tolerance: float = REPLAY_TOLERANCE) -> Solution:
+    """Assemble a Solution (trajectory, controls, multipliers, diagnostics) from a result;
+    ``success`` is the :mod:`~ocgroupoid.solve.verdict` (``ipopt``: the options solved with)."""
     pb, G = tr.problem, tr.problem.groupoid
     t0 = time.perf_counter()
     g_nlp = np.array(tr.g_fun(r.x, r.p)).ravel()
@@ -48,12 +51,18 @@ def make_solution(tr: Transcription, r: RawResult, minima: Sequence[Any],
     ppoly = control_ppoly(out)
     diagnostics = diagnose(tr, r.x, r.p, r.lam_g, out, ppoly, replay=replay, solved=r.success)
     diagnostics["reconstruction_residual_nlp"] = recon_nlp
+    failures = verdict(tr, r, out, diagnostics, ipopt, replay_tolerance)
+    diagnostics["verdict"] = {"verified": r.success and not failures, "failures": failures,
+                              "check_tolerance": check_tolerance(ipopt),
+                              "replay_tolerance": replay_tolerance}
     diagnostics["seconds"] = time.perf_counter() - t0
+    hint = "; ".join(failures) if failures else hint_for(tr, r, out["steps"])
     T = tr.horizon(r.x, r.p)
     P = tr.part(r.p, "P")
     params = {name: P[sl].tolist() for name, sl in pb.parameter_slices.items()}
     return Solution(
-        problem=pb.name, success=r.success, status=r.status, N=tr.N, T=T, cost=r.cost,
+        problem=pb.name, success=r.success and not failures, status=r.status, N=tr.N, T=T,
+        cost=r.cost,
         iterations=r.iterations, solve_seconds=r.solve_seconds,
         build_seconds=tr.build_seconds,
         discretization={"scheme": tr.disc.scheme, "retraction": tr.scheme.retraction,
@@ -63,8 +72,9 @@ def make_solution(tr: Transcription, r: RawResult, minima: Sequence[Any],
         parameters=params, t=out["t"], states=states, velocity_t=out["velocity_t"],
         velocities=velocities, controls_t=out["control_t"], controls=out["controls"],
         control_names=[n for n, _ in pb.controls], multipliers=mult, diagnostics=diagnostics,
-        minima=[m.__dict__ for m in minima], hint=hint_for(tr, r, out["steps"]), x=r.x, p=r.p,
+        minima=[m.__dict__ for m in minima], hint=hint, x=r.x, p=r.p,
         control_ppoly=ppoly, manifolds={f.state: f.manifold for f in G.factors},
+        labels=pb.labels(P),
     )
 
 

@@ -1,4 +1,4 @@
-"""Replay: the reported controls driven through the continuous dynamics (SciPy's DOP853).
+"""Replay: the reported controls driven through the continuous dynamics.
 
 Second-order problems with mechanics integrate ``M(q, y) dy/dt = F(u) - c(q, y)`` with
 ``F_actuated = B u``; second-order problems whose controls are the accelerations integrate
@@ -7,8 +7,10 @@ Second-order problems with mechanics integrate ``M(q, y) dy/dt = F(u) - c(q, y)`
 (``dR/dt = R hat(Omega)``, ...). Any other problem has no replay. The controls are the
 piecewise polynomial the scheme implies (``Solution.control_ppoly``): linear between node
 samples for ``order2``, cubic (second-order problems) or linear within each interval
-(first-order problems) for ``order4``. A user replays a plan the same way with
-``scipy.interpolate.PPoly`` and ``solve_ivp``.
+(first-order problems) for ``order4``. The integrator is RK4 compiled by CasADi and mapped
+over the pieces, its substeps doubled until its own error is negligible (:meth:`Replay.run`):
+a few milliseconds where SciPy's ``solve_ivp`` took seconds. A user replays a plan the same
+way with ``scipy.interpolate.PPoly`` and ``solve_ivp`` (tests do, and agree).
 """
 
 from __future__ import annotations
@@ -17,9 +19,12 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
-from scipy.integrate import solve_ivp
 
 from ..nlp.transcription import Transcription
+
+#: RK4 substeps per piece: the first pair compared, and the most ever taken
+SUBSTEPS = (1, 256)
+REL_TOL, ABS_TOL = 1e-3, 1e-12  # the replay's own error, against what it reports
 
 
 def terminal_errors(tr: Transcription, s: np.ndarray, y: np.ndarray | None, p: np.ndarray
@@ -55,7 +60,9 @@ class Replay:
         q = G.base(s)
         sdot = G.state_rate(s, y)
         self.reason = ""
+        #: ``rhs(z, u, P) -> dz/dt``, z the node state (and the velocity, second order)
         self.rhs: ca.Function | None = None
+        self._cache: dict[tuple[int, ...], ca.Function] = {}
         ctrl = tr.scheme.stages.controls
         if pb.order == 2 and pb.dynamics is not None:
             mech = pb.dynamics
@@ -64,9 +71,10 @@ class Replay:
             c = ca.substitute(EL, pb.dy, ca.DM.zeros(G.algebra_dim))
             F = ca.SX.zeros(G.algebra_dim)
             F[list(mech.actuated)] = ca.mtimes(ca.substitute(mech.input_matrix, pb.q, q), u)
-            self.rhs = ca.Function("rhs", [s, y, u, pb.P], [sdot, ca.solve(M, F - c)])
+            self.rhs = ca.Function("rhs", [ca.vertcat(s, y), u, pb.P],
+                                   [ca.vertcat(sdot, ca.solve(M, F - c))])
         elif pb.order == 2 and ca.depends_on(ctrl, pb.dy) and ca.is_equal(ctrl, pb.dy, 2):
-            self.rhs = ca.Function("rhs", [s, y, u, pb.P], [sdot, u])
+            self.rhs = ca.Function("rhs", [ca.vertcat(s, y), u, pb.P], [ca.vertcat(sdot, u)])
         elif pb.order == 1:
             self._first_order(s, q, y, u, sdot, ctrl)
         else:
@@ -98,37 +106,69 @@ class Replay:
         ysol = ca.substitute(yfull, ydep, -ca.solve(J, r0))  # exact for affine psi
         self.rhs = ca.Function("rhs", [s, u, pb.P], [ca.substitute(sdot, y, ysol)])
 
-    def run(self, out: dict[str, np.ndarray], ppoly: dict[str, np.ndarray], p: np.ndarray,
-            rtol: float = 1e-12, atol: float = 1e-12) -> dict[str, Any]:
+    def run(self, out: dict[str, np.ndarray], ppoly: dict[str, np.ndarray], p: np.ndarray
+            ) -> dict[str, Any]:
         """Integrate from the read-out's initial state, piece by piece of the control
-        polynomial; return the final state and its errors against the targets of p."""
+        polynomial; return the final state's errors against the targets of p.
+
+        RK4 with M substeps per piece, compiled and mapped over the pieces, M doubled until
+        two successive results agree (their difference, /15, estimates the error of the
+        finer one, which is then Richardson-extrapolated) to 1e-3 of the terminal error or
+        :data:`ABS_TOL`: the replay's own error is never what it reports."""
         if self.rhs is None:
             return {"available": False, "reason": self.reason}
         tr = self.tr
-        breaks, C = ppoly["x"], ppoly["c"]  # C: (k, pieces, m), highest power first
+        breaks, C = np.asarray(ppoly["x"], dtype=float), np.asarray(ppoly["c"], dtype=float)
+        k, n, m = C.shape  # (k, pieces, m), highest power first
         P = tr.part(p, "P")
         ns = tr.problem.groupoid.state_size
         second = tr.problem.end_velocities  # the state carries the velocities too
-        z = np.concatenate([out["node_states"][0], out["velocities"][0]]) if second else \
+        z0 = np.concatenate([out["node_states"][0], out["velocities"][0]]) if second else \
             out["node_states"][0].copy()
-        rhs = self.rhs
+        coeffs = C.transpose(0, 2, 1).reshape(k * m, n)  # column j: piece j, m fastest
+        args = (z0, coeffs, np.diff(breaks)[None, :], np.repeat(P[:, None], n, axis=1))
+        M = SUBSTEPS[0]
+        previous = np.asarray(self._pieces(k, m, M, n)(*args))[:, -1]
+        while True:
+            M *= 2
+            z = np.asarray(self._pieces(k, m, M, n)(*args))[:, -1]
+            estimate = float(np.max(np.abs(z - previous))) / 15.0
+            z = z + (z - previous) / 15.0
+            if not np.all(np.isfinite(z)):
+                return {"available": False, "reason": "the replayed state diverged (not finite)"}
+            errors = terminal_errors(tr, z[:ns], z[ns:] if second else None, p)
+            worst = max(errors.values()) if errors else 0.0
+            if estimate <= max(REL_TOL * worst, ABS_TOL) or M >= SUBSTEPS[1]:
+                break
+            previous = z
+        return {"available": True, "terminal_error": errors, "max_terminal_error": worst,
+                "integration_error": estimate, "substeps": M}
 
-        def f(t: float, z: np.ndarray, a: float, coeffs: np.ndarray) -> np.ndarray:
-            u = coeffs[0].copy()
-            for c in coeffs[1:]:  # Horner in t - a
-                u = u * (t - a) + c
-            if second:
-                sd, yd = rhs(z[:ns], z[ns:], u, P)
-                return np.concatenate([sd.full().ravel(), yd.full().ravel()])
-            return rhs(z, u, P).full().ravel()
+    def _pieces(self, k: int, m: int, M: int, n: int) -> ca.Function:
+        """``(z0, coefficients (k m x n), steps (1 x n), P) -> z`` after every piece: M RK4
+        substeps per piece, the control evaluated by Horner's rule in t - t_j."""
+        key = (k, m, M, n)
+        if key not in self._cache:
+            assert self.rhs is not None
+            nz = self.rhs.size1_in(0)
+            z, c, h, P = (ca.SX.sym(n, d) for n, d in (("z", nz), ("c", k * m), ("h", 1),
+                                                        ("P", self.rhs.size1_in(2))))
+            cm = ca.reshape(c, m, k)
 
-        for j in range(len(breaks) - 1):
-            a, b = breaks[j], breaks[j + 1]
-            sol = solve_ivp(f, (a, b), z, method="DOP853", rtol=rtol, atol=atol,
-                            args=(a, C[:, j, :]))
-            if not sol.success:
-                return {"available": False, "reason": f"solve_ivp failed: {sol.message}"}
-            z = sol.y[:, -1]
-        errors = terminal_errors(tr, z[:ns], z[ns:] if second else None, p)
-        return {"available": True, "terminal_error": errors,
-                "max_terminal_error": max(errors.values()) if errors else 0.0}
+            def f(zz: ca.SX, t: ca.SX) -> ca.SX:
+                u = cm[:, 0]
+                for j in range(1, k):
+                    u = u * t + cm[:, j]
+                return self.rhs(zz, u, P)
+
+            dt, zz = h / M, z
+            for i in range(M):
+                t = i * dt
+                k1 = f(zz, t)
+                k2 = f(zz + dt / 2 * k1, t + dt / 2)
+                k3 = f(zz + dt / 2 * k2, t + dt / 2)
+                k4 = f(zz + dt * k3, t + dt)
+                zz = zz + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+            piece = ca.Function("piece", [z, c, h, P], [zz])
+            self._cache[key] = piece.mapaccum(n)
+        return self._cache[key]

@@ -12,15 +12,14 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
 from ..errors import SolverError
+from .outputs import write_atomic  # noqa: F401  (re-exported: callers import it from here)
 
 
 def _jsonable(v: Any) -> Any:
@@ -40,25 +39,9 @@ def _jsonable(v: Any) -> Any:
     return v
 
 
-def write_atomic(path: str | Path, data: bytes | str) -> None:
-    """Write a file via a temporary file in the same folder and an atomic rename.
-
-    An interrupted write leaves the previous file untouched, never a half-written one.
-    """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    raw = data.encode() if isinstance(data, str) else data
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(raw)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+#: draws a Solution (``plot(solution, path)``): set by :mod:`ocgroupoid.plotting` when it is
+#: imported (as ``import ocgroupoid`` does), a layer above this one
+PLOTTER: Callable[["Solution", "str | Path | None"], Any] | None = None
 
 
 @dataclass
@@ -93,6 +76,13 @@ class Solution:
     p: np.ndarray = field(default_factory=lambda: np.zeros(0))
     #: the manifold of every state (``SO(3)``, ``SE(3)``, ``S^2``, ``R^2``, ...)
     manifolds: dict[str, str] = field(default_factory=dict)
+    #: names and units of what it reports, the prescribed final states and the bounds at the
+    #: solved parameters (:meth:`~ocgroupoid.model.problem.Problem.labels`; {} in old files)
+    labels: dict[str, Any] = field(default_factory=dict)
+    #: IPOPT runs of the solve (multi-start) and their summed time; ``solve_seconds`` is the
+    #: best start's
+    starts: int = 1
+    ipopt_seconds_total: float = 0.0
 
     def __repr__(self) -> str:
         return (f"Solution({self.problem!r}, status={self.status!r}, cost={self.cost:.10g}, "
@@ -107,6 +97,13 @@ class Solution:
             raise ValueError("this solution carries no control polynomial (an old file?)")
         return PPoly(np.asarray(self.control_ppoly["c"], dtype=float),
                      np.asarray(self.control_ppoly["x"], dtype=float))(t)
+
+    def plot(self, path: str | Path | None = None) -> Any:
+        """The figure of this solution (a matplotlib Figure, :func:`ocgroupoid.plot`); with
+        ``path``, also written there as a PNG."""
+        if PLOTTER is None:
+            raise RuntimeError("no plotter registered: import ocgroupoid (or ocgroupoid.plotting)")
+        return PLOTTER(self, path)
 
     def raise_for_status(self) -> "Solution":
         """Raise SolverError (with IPOPT's status and the hint) unless solved."""
@@ -123,13 +120,15 @@ class Solution:
             "T": self.T,
             "cost": self.cost,
             "stats": {"iterations": self.iterations, "solve_seconds": self.solve_seconds,
-                      "build_seconds": self.build_seconds},
+                      "build_seconds": self.build_seconds, "starts": self.starts,
+                      "ipopt_seconds_total": self.ipopt_seconds_total},
             "discretization": self.discretization,
             "parameters": self.parameters,
             "controls": {"t": self.controls_t, "u": self.controls, "names": self.control_names,
                          "ppoly": self.control_ppoly},
             "states": {"t": self.t, **self.states},
             "manifolds": self.manifolds,
+            "labels": self.labels,
             "velocities": {"t": self.velocity_t, **self.velocities},
             "multipliers": self.multipliers,
             "diagnostics": self.diagnostics,
@@ -162,6 +161,8 @@ class Solution:
             iterations=int(d["stats"]["iterations"]),
             solve_seconds=float(d["stats"]["solve_seconds"]),
             build_seconds=float(d["stats"].get("build_seconds", 0.0)),
+            starts=int(d["stats"].get("starts", 1)),
+            ipopt_seconds_total=float(d["stats"].get("ipopt_seconds_total", 0.0)),
             discretization=d.get("discretization", {}), parameters=d.get("parameters", {}),
             t=arr(states.pop("t")), states={k: np.array(v, dtype=float) for k, v in states.items()},
             velocity_t=arr(vels.pop("t")),
@@ -171,7 +172,7 @@ class Solution:
             control_ppoly={k: np.array(v, dtype=float) for k, v in
                            ctrl.get("ppoly", {}).items()},
             diagnostics=d.get("diagnostics", {}), minima=d.get("minima", []),
-            manifolds=dict(d.get("manifolds", {})),
+            manifolds=dict(d.get("manifolds", {})), labels=dict(d.get("labels", {})),
             hint=d.get("hint", ""), x=np.array(d.get("nlp", {}).get("x", []), dtype=float),
             p=np.array(d.get("nlp", {}).get("p", []), dtype=float),
         )

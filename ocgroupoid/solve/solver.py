@@ -9,6 +9,7 @@ first and interpolates each solution onto the next grid as its initial guess.
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, replace
 from typing import Any, Callable, Iterable, Sequence
 
@@ -18,16 +19,41 @@ from ..errors import ConfigError
 from ..model.problem import Problem
 from ..nlp.schemes import DEFAULT_RULE, DEFAULT_SCHEME
 from ..nlp.transcription import Discretization, Guess, RawResult, Transcription
+from ..nlp.watch import Listener
 from . import mesh
 from .guesses import geodesic_guesses, interpolate, model_guesses, perturbed_guesses
+from .interrupt import Interrupt, interruptible
 from .readout import make_solution
 from .solution import Solution
+from .verdict import REPLAY_TOLERANCE
 
 Progress = Callable[[str], None]
+#: a further start of a multi-start gets max(a, b x the first start's) iterations: one that
+#: needs far more is on its way to a worse minimum or nowhere (it is stopped, not counted)
+START_BUDGET = (30, 3)
+PROGRESS_EVERY = 0.25  # seconds between two reports of IPOPT's iterations
 
 
 def _noop(_: str) -> None:
     return None
+
+
+def _listener(where: str, progress: Progress, interrupt: Interrupt, budget: int | None
+              ) -> Listener:
+    """IPOPT's iteration callback: progress (iteration, objective, infeasibility) at most
+    every :data:`PROGRESS_EVERY` seconds; a stop once Ctrl-C was pressed or after ``budget``
+    iterations."""
+    last = [time.perf_counter()]
+
+    def listen(iteration: int, objective: float, infeasibility: float) -> bool:
+        now = time.perf_counter()
+        if now - last[0] >= PROGRESS_EVERY:
+            last[0] = now
+            progress(f"{where}: iteration {iteration}, objective {objective:.6g}, "
+                     f"infeasibility {infeasibility:.1e}")
+        return interrupt.requested or (budget is not None and iteration >= budget)
+
+    return listen
 
 
 @dataclass
@@ -95,12 +121,19 @@ class Solver:
     def solve(self, params: dict[str, Any] | None = None, initial: dict[str, Any] | None = None,
               final: dict[str, Any] | None = None, T: float | None = None,
               multistart: bool | int = False, continuation: Sequence[int] | None = None,
-              guess: Guess | None = None, replay: bool = True, progress: Progress = _noop
-              ) -> Solution:
-        """Solve with IPOPT and return a diagnosed Solution (``success`` may be False).
+              guess: Guess | None = None, replay: bool = True, progress: Progress = _noop,
+              replay_tolerance: float = REPLAY_TOLERANCE) -> Solution:
+        """Solve with IPOPT and return a diagnosed Solution; ``success`` is the
+        :mod:`~ocgroupoid.solve.verdict` (IPOPT converged and the solution checked out).
 
-        ``multistart``: True (3 perturbations) or the number of perturbed starts, on top of
-        the geodesic and model guesses. ``continuation``: coarser N solved first, in order.
+        ``multistart``: True (every geodesic guess, the model's guesses and 3 perturbations;
+        a further start gets :data:`START_BUDGET` iterations; the default of problem files
+        and the CLI), False (the first geodesic only; the default here, which the exported
+        C solver shares) or the number of perturbed starts. ``continuation``: coarser N
+        solved first, in order. ``replay``: drive the controls through the continuous
+        dynamics (a few ms; it decides whether the plan lands, ``replay_tolerance``).
+        ``progress`` hears each start and, every 0.25 s, IPOPT's iteration. Ctrl-C stops the
+        solve with the best point so far, ``status: interrupted``.
         """
         levels = sorted(set(int(n) for n in (continuation or [])))
         if any(n >= self.disc.N for n in levels):
@@ -108,27 +141,41 @@ class Solver:
         results: list[RawResult] = []
         seeds: list[Guess] | None = [guess] if guess is not None else None
         prev: tuple[Transcription, RawResult] | None = None
-        for n in [*levels, self.disc.N]:
-            tr = self._at(n)
-            p = tr.pack(params, initial, final, T)
-            if prev is not None:
-                starts = [interpolate(prev[0], prev[1].x, prev[1].p, n)]
-            else:
-                starts = seeds or self.guesses(tr, p, multistart)
-            level: list[RawResult] = []
-            for i, g in enumerate(starts):
-                progress(f"N={n}: start {i + 1}/{len(starts)} ({g.label})")
-                level.append(tr.solve(g, p))
-            if prev is None:
-                results = level
-            best = min(level, key=lambda r: (not r.success, r.cost))
-            prev = (tr, best)
-        assert prev is not None
-        tr, best = prev
-        if self.disc.steps == "adaptive" and best.success:
-            tr, best = self._adapt(tr, best, params, initial, final, progress)
+        with interruptible() as interrupt:
+            for n in [*levels, self.disc.N]:
+                tr = self._at(n)
+                p = tr.pack(params, initial, final, T)
+                if prev is not None:
+                    starts = [interpolate(prev[0], prev[1].x, prev[1].p, n)]
+                else:
+                    starts = seeds or self.guesses(tr, p, multistart)
+                level: list[RawResult] = []
+                budget: int | None = None  # iterations of a further start
+                for i, g in enumerate(starts):
+                    where = f"N={n}: start {i + 1}/{len(starts)} ({g.label})"
+                    progress(where)
+                    level.append(tr.solve(g, p, _listener(where, progress, interrupt, budget)))
+                    if interrupt.requested:
+                        break
+                    if i == 0 and level[0].success:
+                        budget = max(START_BUDGET[0], START_BUDGET[1] * level[0].iterations)
+                if prev is None:
+                    results = level
+                best = min(level, key=lambda r: (not r.success, r.cost))
+                prev = (tr, best)
+                if interrupt.requested:
+                    break
+            assert prev is not None
+            tr, best = prev
+            if interrupt.requested:
+                best = replace(best, status="interrupted", success=False)
+            elif self.disc.steps == "adaptive" and best.success:
+                tr, best = self._adapt(tr, best, params, initial, final, progress)
         progress("diagnostics")
-        return make_solution(tr, best, distinct_minima(results), replay)
+        solution = make_solution(tr, best, distinct_minima(results), replay, self.ipopt,
+                                 replay_tolerance)
+        return replace(solution, starts=len(results),
+                       ipopt_seconds_total=sum(r.solve_seconds for r in results))
 
     def _adapt(self, tr: Transcription, r: RawResult, params: dict[str, Any] | None,
                initial: dict[str, Any] | None, final: dict[str, Any] | None,

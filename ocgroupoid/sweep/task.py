@@ -138,9 +138,12 @@ def _attempts(solver: Solver, cfg: Config, args: dict[str, Any],
     """Solve in the order ``mode`` asks; the first success, else the first attempt's result,
     and whether the result came from the neighbour."""
     s = cfg.file.solver
+    # a sweep's own globalisation is the warm start from a neighbour: multi-start (the
+    # default of a single solve) only where the file asks for it
+    multistart = s.multistart if "multistart" in s.model_fields_set else False
 
     def cold() -> Solution:
-        return solver.solve(**args, multistart=s.multistart, continuation=s.continuation or None)
+        return solver.solve(**args, multistart=multistart, continuation=s.continuation or None)
 
     def warm() -> Solution:
         assert near is not None
@@ -150,7 +153,7 @@ def _attempts(solver: Solver, cfg: Config, args: dict[str, Any],
 
     if near is None or mode == "off":
         return cold(), False
-    order = [(warm, True), (cold, False)] if mode == "first" and not s.multistart else \
+    order = [(warm, True), (cold, False)] if mode == "first" and not multistart else \
         [(cold, False), (warm, True)]
     tried = []
     for attempt, from_near in order:

@@ -2,8 +2,11 @@
  * prints the solution JSON on stdout.
  *
  * PARAMS holds one `KEY v1 v2 ...` line per key of README.md's table; `#` starts a comment;
- * keys left out keep the exported values. Exit codes: 0 solved, 1 IPOPT failed (the JSON is
- * still printed, with success false and IPOPT's status), 2 bad input (a message on stderr).
+ * keys left out keep the exported values. The numbers are checked as the problem files
+ * check them in Python, with the same messages: finite, representable (no overflow or
+ * underflow), and > 0 for the physical parameters a model requires positive (inertias,
+ * masses, radii). Exit codes: 0 solved, 1 IPOPT failed (the JSON is still printed, with
+ * success false and IPOPT's status), 2 bad input (a message on stderr).
  */
 #define _POSIX_C_SOURCE 200809L
 
@@ -12,6 +15,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "ocg_model.h"
 #include "ocg_solver.h"
@@ -38,6 +42,30 @@ static int find_block(const char *key) {
   return -1;
 }
 
+/* x as Python's repr writes it (shortest round trip, "1.0" not "1", "1e-05"), so that the
+ * messages read as the Python side's. */
+static void python_repr(double x, char *buf, size_t size) {
+  int digits, exponent;
+  if (x == 0.0 || !isfinite(x)) {
+    snprintf(buf, size, "%s", x != x ? "nan" : isinf(x) ? (x > 0 ? "inf" : "-inf")
+                                                      : (signbit(x) ? "-0.0" : "0.0"));
+    return;
+  }
+  for (digits = 1; digits < 17; ++digits) {
+    snprintf(buf, size, "%.*e", digits - 1, x);
+    if (strtod(buf, NULL) == x) break;
+  }
+  exponent = (int)floor(log10(fabs(strtod(buf, NULL))));
+  if (exponent >= -4 && exponent < 16) {
+    size_t n;
+    snprintf(buf, size, "%.*f", digits - 1 - exponent > 0 ? digits - 1 - exponent : 0, x);
+    n = strlen(buf);
+    if (!strchr(buf, '.') && n + 2 < size) memcpy(buf + n, ".0", 3);
+  } else {
+    snprintf(buf, size, "%.*e", digits - 1, x);
+  }
+}
+
 /* Read PARAMS into values (which hold the defaults); 0, or 2 with a message. */
 static int read_params(const char *path, double *values) {
   FILE *in = fopen(path, "r");
@@ -45,8 +73,14 @@ static int read_params(const char *path, double *values) {
   size_t cap = 0;
   int seen[OCG_N_BLOCKS + 1] = {0};
   int number = 0, status = 0;
+  struct stat info;
   if (!in) {
     fprintf(stderr, "error: cannot open %s: %s\n", path, strerror(errno));
+    return 2;
+  }
+  if (fstat(fileno(in), &info) == 0 && S_ISDIR(info.st_mode)) {
+    fprintf(stderr, "error: %s is a folder; give a parameter file (e.g. params.txt)\n", path);
+    fclose(in);
     return 2;
   }
   while (status == 0 && getline(&line, &cap, in) != -1) {
@@ -70,17 +104,36 @@ static int read_params(const char *path, double *values) {
       break;
     }
     while ((tok = strtok_r(NULL, " \t\r\n", &save)) != NULL) {
-      char *end;
-      double v = strtod(tok, &end);
-      if (*end != '\0') {
+      char *end, shown[40];
+      double v;
+      errno = 0;
+      v = strtod(tok, &end);
+      if (end == tok || *end != '\0') {
         fprintf(stderr, "error: %s:%d: '%s' is not a number (key %s)\n", path, number, tok,
                 key);
         status = 2;
         break;
       }
       if (!isfinite(v)) {
-        fprintf(stderr, "error: %s:%d: %s has a non-finite value '%s'; give finite numbers\n",
-                path, number, key, tok);
+        fprintf(stderr, "error: %s:%d: %s has a non-finite value '%s'%s; give finite numbers\n",
+                path, number, key, tok, errno == ERANGE ? " (it overflows a double)" : "");
+        status = 2;
+        break;
+      }
+      if (errno == ERANGE) {
+        fprintf(stderr, "error: %s:%d: %s: '%s' underflows (a double holds magnitudes down "
+                "to 2.2e-308); write 0 or a larger number\n", path, number, key, tok);
+        status = 2;
+        break;
+      }
+      if (ocg_blocks[b].positive && !(v > 0)) {
+        python_repr(v, shown, sizeof shown);
+        if (ocg_blocks[b].size == 1)
+          fprintf(stderr, "error: %s:%d: %s: value must be > 0, got %s\n", path, number, key,
+                  shown);
+        else
+          fprintf(stderr, "error: %s:%d: %s: component %d must be > 0, got %s\n", path, number,
+                  key, count, shown);
         status = 2;
         break;
       }
@@ -93,6 +146,10 @@ static int read_params(const char *path, double *values) {
               count);
       status = 2;
     }
+  }
+  if (status == 0 && ferror(in)) {
+    fprintf(stderr, "error: reading %s failed: %s\n", path, strerror(errno));
+    status = 2;
   }
   free(line);
   fclose(in);

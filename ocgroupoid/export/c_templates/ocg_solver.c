@@ -490,7 +490,8 @@ int ocg_write_json(const ocg_result *r, FILE *out) {
   ocg_json_coefficients(out, v, rows, cols, (size_t)OCG_NU);
   fputs("}},\n \"states\": ", out);
   ocg_json_fields(out, r, OCG_T, OCG_STATES, ocg_state_fields, OCG_N_STATE_FIELDS);
-  fputs(",\n \"manifolds\": " OCG_MANIFOLDS_JSON ",\n \"velocities\": ", out);
+  fputs(",\n \"manifolds\": " OCG_MANIFOLDS_JSON ",\n \"labels\": " OCG_LABELS_JSON
+        ",\n \"velocities\": ", out);
   ocg_json_fields(out, r, OCG_VELOCITY_T, OCG_VELOCITIES, ocg_velocity_fields,
                   OCG_N_VELOCITY_FIELDS);
   fputs(",\n \"multipliers\": {\"t\": ", out);

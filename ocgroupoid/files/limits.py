@@ -1,0 +1,181 @@
+"""What a problem file may ask of this machine: N and the starts within a memory estimate, and
+IPOPT's linear solver among those that are installed.
+
+``horizon.N`` is bounded by memory: a scheme has at most ``2 dim(y) + dim(s)`` decision
+variables per interval, and a variable costs about :data:`BYTES_PER_VARIABLE` once the stage
+graphs, the derivatives, IPOPT and MUMPS's factor exist (3-8 kB measured on the shipped
+problems at N = 10 000); every start of a multi-start keeps a few vectors of its own. The
+estimate must stay below half of the machine's memory. CasADi's IPOPT ships the linear
+solvers MUMPS and SPRAL; the HSL solvers (``ma27``, ``ma57``...) and Pardiso are loaded at
+run time from their libraries, which are looked for before IPOPT is asked for them (an IPOPT
+asked for a missing one reports Invalid_Option, or crashes).
+"""
+
+from __future__ import annotations
+
+import ctypes.util
+import io
+import math
+import os
+import re
+import sys
+from contextlib import contextmanager, redirect_stdout
+from functools import lru_cache
+from pathlib import Path
+from typing import Any, Callable, Iterator
+
+import casadi as ca
+
+from ..errors import ConfigError
+from ..model.problem import Problem
+
+BYTES_PER_VARIABLE = 16_000
+BYTES_PER_START = 4 * 8  # per variable and start: the guess, x, and the multipliers
+HSL = ("ma27", "ma57", "ma77", "ma86", "ma97")
+LINEAR_SOLVERS = ("mumps", "spral", *HSL, "pardiso", "pardisomkl")
+
+
+def memory_bytes() -> int:
+    """The machine's physical memory (8 GiB when the system does not say)."""
+    try:
+        return int(os.sysconf("SC_PHYS_PAGES")) * int(os.sysconf("SC_PAGE_SIZE"))
+    except (AttributeError, ValueError, OSError):  # pragma: no cover - non-POSIX systems
+        return 8 * 2 ** 30
+
+
+def variables_per_interval(pb: Problem) -> int:
+    """An upper bound of the decision variables per interval over every scheme."""
+    G = pb.groupoid
+    return 2 * G.algebra_dim + G.state_size
+
+
+def check_size(pb: Problem, N: int, starts: int, where: str) -> None:
+    """Refuse ``N`` intervals (and ``starts`` starts) whose memory estimate exceeds half of
+    the machine's memory; ``where`` locates ``horizon.N`` for the message."""
+    per = variables_per_interval(pb)
+    budget = memory_bytes() // 2
+    cost = per * (BYTES_PER_VARIABLE + max(starts, 1) * BYTES_PER_START)
+    n_max = max(budget // cost, 2)
+    if N > n_max:
+        raise ConfigError(
+            f"{where}: horizon.N = {N} needs about {N * cost / 1e9:.3g} GB of memory ({per} "
+            f"variables per interval, ~{BYTES_PER_VARIABLE // 1000} kB each), more than half "
+            f"of this machine's {memory_bytes() / 1e9:.3g} GB: the limit here is N <= {n_max}; "
+            "lower N (use solver.continuation to reach a fine grid from coarse ones)")
+
+
+def _library(*names: str) -> bool:
+    """True when one of the shared libraries ``names`` (``hsl`` for libhsl.so) is installed,
+    on the loader's path or beside CasADi's own."""
+    folder = Path(ca.__file__).parent
+    return any(ctypes.util.find_library(n) or any(folder.glob(f"lib{n}.*")) for n in names)
+
+
+@lru_cache(maxsize=None)
+def linear_solvers() -> tuple[str, ...]:
+    """IPOPT's linear solvers available here: MUMPS and SPRAL are built into CasADi's IPOPT;
+    the others are loaded at run time from their libraries (HSL, Pardiso, MKL) when found."""
+    found = ["mumps", "spral"]
+    if _library("hsl", "coinhsl"):
+        found += HSL
+    if _library("pardiso"):
+        found.append("pardiso")
+    if _library("mkl_rt"):
+        found.append("pardisomkl")
+    return tuple(found)
+
+
+def check_linear_solver(ipopt: dict, where: str) -> None:
+    """Refuse ``solver.ipopt.linear_solver`` when IPOPT cannot load it, naming those it can
+    (an HSL solver is trusted when ``hsllib`` names its library)."""
+    name = ipopt.get("linear_solver")
+    name = name.lower() if isinstance(name, str) else name  # IPOPT reads it in any case
+    if name is None or name in linear_solvers() or \
+            (name in HSL and "hsllib" in ipopt) or (name == "pardiso" and "pardisolib" in ipopt):
+        return
+    known = "" if name in LINEAR_SOLVERS else \
+        f" (IPOPT's linear solvers are {', '.join(LINEAR_SOLVERS)})"
+    raise ConfigError(f"{where}: solver.ipopt.linear_solver: {name!r} is not available with "
+                      f"this IPOPT{known}; choose one of {', '.join(linear_solvers())} (HSL's "
+                      "ma27, ma57, ... need the HSL library, libhsl, installed)")
+
+
+OPTIONS_URL = "https://coin-or.github.io/Ipopt/OPTIONS.html"
+# options not tried on a probe: checked above, or with effects beyond the probe (files)
+UNTRIED = {"linear_solver", "hsllib", "pardisolib", "output_file", "file_print_level",
+           "option_file_name", "file_append"}
+
+
+@contextmanager
+def _captured_stdout() -> Iterator[io.StringIO]:
+    """What IPOPT prints (through CasADi, to Python's stdout) while refusing an option: the
+    option's documentation, with its range or choices. File descriptor 1 is silenced too, for
+    builds of CasADi that print there."""
+    buffer = io.StringIO()
+    sys.stdout.flush()
+    try:
+        saved, null = os.dup(1), os.open(os.devnull, os.O_WRONLY)
+    except OSError:  # no descriptor 1 to silence
+        saved = null = -1
+    if saved >= 0:
+        os.dup2(null, 1)
+    try:
+        with redirect_stdout(buffer):
+            yield buffer
+    finally:
+        if saved >= 0:
+            os.dup2(saved, 1)
+            os.close(saved)
+            os.close(null)
+
+
+def _documented(text: str) -> str:
+    """The range (``0 < (1e-08) <= +inf``) or the choices of an option, from IPOPT's
+    documentation of it."""
+    lines = [ln.strip() for ln in text.splitlines()]
+    for ln in lines:
+        if re.fullmatch(r"\S+ <=? \(.*\) <=? \S+", ln):
+            return f"its range is {ln} (the default in brackets)"
+    if "Valid Settings:" in lines:
+        start = lines.index("Valid Settings:") + 1
+        choices = [ln.split(" ")[0] for ln in lines[start:] if ln and not ln.startswith(
+            "Default:")]
+        return f"choose one of {', '.join(choices[:12])}"
+    return f"see {OPTIONS_URL}"
+
+
+@lru_cache(maxsize=256)
+def ipopt_refuses(key: str, value: Any, kind: str) -> str | None:
+    """Why IPOPT refuses the option ``key: value`` (None if it takes it), from a
+    one-variable problem built with it (``kind``, the value's type, keys the cache)."""
+    x = ca.SX.sym("x")
+    try:
+        with _captured_stdout() as printed:
+            ca.nlpsol("ipopt_option_probe", "ipopt", {"x": x, "f": x ** 2},
+                      {"ipopt": {"sb": "yes", "print_level": 0, key: value},
+                       "print_time": False})
+    except RuntimeError as err:
+        reason = str(err).strip().splitlines()[-1] if str(err).strip() else ""
+        if "No such IPOPT option" in reason:
+            return f"IPOPT has no option {key!r}; see {OPTIONS_URL}"
+        if "type mismatch" in reason:
+            return (f"{value!r} has the wrong type for this option (a number, an integer or a "
+                    f"text: see {OPTIONS_URL})")
+        return f"IPOPT refuses {value!r}: {_documented(printed.getvalue())}"
+    return None
+
+
+def check_ipopt_options(ipopt: dict, where: Callable[..., str]) -> None:
+    """Refuse ``solver.ipopt`` options IPOPT would refuse, before anything is built;
+    ``where(*key)`` locates a key for the message."""
+    check_linear_solver(ipopt, where("solver", "ipopt", "linear_solver"))
+    for key, value in ipopt.items():
+        at = f"{where('solver', 'ipopt', key)}: solver.ipopt.{key}"
+        if isinstance(value, float) and not math.isfinite(value):
+            raise ConfigError(f"{at}: {value} is not finite; write a number (IPOPT reads "
+                              "1.0e+19 as infinity)")
+        if key in UNTRIED:
+            continue
+        reason = ipopt_refuses(key, value, type(value).__name__)
+        if reason:
+            raise ConfigError(f"{at}: {reason}")

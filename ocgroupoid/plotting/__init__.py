@@ -1,0 +1,37 @@
+"""Figures of a Solution for engineers: every quantity against time with its meaning, unit
+and one legend entry per component; attitude errors to the target, x-y paths with start and
+target; bounds, targets and a free final time marked (see :mod:`ocgroupoid.plotting.panels`).
+
+``plot(solution, path=None)`` returns the matplotlib Figure (and writes a PNG at ``path``);
+``Solution.plot`` calls it (registered here, as this layer sits above the Solution's).
+"""
+
+from __future__ import annotations
+
+import io
+from pathlib import Path
+from typing import Any
+
+from ..solve import solution as _solution
+from ..solve.solution import Solution, write_atomic
+from .figure import figure
+from .panels import Panel, panels
+
+DPI = 110
+
+
+def plot(solution: Solution, path: str | Path | None = None, dpi: int = DPI) -> Any:
+    """The figure of a Solution (a ``matplotlib.figure.Figure``, no pyplot state): the
+    panels of :func:`~ocgroupoid.plotting.panels.panels` in two columns; with ``path``, also
+    written there as a PNG (atomically)."""
+    fig = figure(solution, panels(solution))
+    if path is not None:
+        buf = io.BytesIO()
+        fig.savefig(buf, format="png", dpi=dpi)
+        write_atomic(path, buf.getvalue())
+    return fig
+
+
+_solution.PLOTTER = plot
+
+__all__ = ["plot", "panels", "figure", "Panel"]

@@ -1,0 +1,126 @@
+"""Dependent conditions at a solution: the rank test of the equality-constraint Jacobian.
+
+When prescribed conditions are redundant on the feasible set (a reaction-wheel slew with zero
+total momentum and both ``Omega(T)`` and ``dphi(T)`` prescribed: conservation of angular
+momentum makes one imply the other), the Jacobian ``J`` of the equality rows loses rank at
+the solution, LICQ fails, the multipliers are not unique, and IPOPT converges slowly or to a
+degraded point. A generic point does not show it (the dependency holds only where the
+conservation law does), so the test runs at the solution itself.
+
+Each vector ``y`` with ``J^T y = 0`` is a dependency among the rows it touches. With the rows
+of ``J`` scaled to unit length, such ``y`` are found by two steps of inverse iteration with
+the sparse LU of the saddle-point matrix ``K = [[gamma I, J^T], [J, -delta I]]``, whose
+eigenvalues near zero are ``-sigma^2 / gamma - delta`` for the small singular values
+``sigma`` of ``J``: cheap at any N (one sparse LU), and never squaring the conditioning of
+``J`` as ``J J^T`` would. A ``y`` with ``|J^T y| <= RANK_TOL`` is a dependency. Prescribed
+values are not rows (they are parameters p), so each dependency is named by the parameters
+it constrains: ``y^T dg/dp != 0`` means moving that value makes the conditions inconsistent.
+Bounds are left out: active bounds are often dependent (more active points than control
+freedom on a bang arc) and their multipliers keep their sign.
+"""
+
+from __future__ import annotations
+
+from weakref import WeakKeyDictionary
+
+import casadi as ca
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spl
+
+from ..nlp.transcription import Transcription
+
+RANK_TOL = 1e-9  # |J^T y| of a dependency, rows of J of unit length, |y| = 1
+GAMMA, DELTA = 1e-6, 1e-13  # the saddle-point matrix K
+PROBES = 8  # inverse-iteration vectors: more than the dependencies a problem may hold
+
+_jac_p: WeakKeyDictionary[Transcription, ca.Function] = WeakKeyDictionary()
+
+
+def _csc(M: ca.DM) -> sp.csc_matrix:
+    colind, row = M.sparsity().get_ccs()
+    return sp.csc_matrix((np.array(M.nonzeros()), row, colind), shape=M.shape)
+
+
+def _jacobian_p(tr: Transcription) -> ca.Function:
+    """``dg/dp (x, p)``: how the constraints move with the parameters, built once."""
+    if tr not in _jac_p:
+        x, p = tr.nlp["x"], tr.nlp["p"]
+        _jac_p[tr] = ca.Function("jac_g_p", [x, p], [ca.jacobian(tr.nlp["g"], p)])
+    return _jac_p[tr]
+
+
+def parameter_labels(tr: Transcription) -> list[str]:
+    """The condition every entry of p stands for: ``final.Omega``, ``parameters.inertia``..."""
+    pb, G, lay = tr.problem, tr.problem.groupoid, tr.layout
+    labels = [f"p[{i}]" for i in range(tr.np)]
+    for name, sl in pb.parameter_slices.items():
+        for i in range(sl.start, sl.stop):
+            labels[lay.p_slices["P"].start + i] = f"parameters.{name}"
+    for key, end, slices, attr in (("start", "initial", G.target_layout.slices, "state"),
+                                   ("end", "final", G.target_layout.slices, "state"),
+                                   ("V0", "initial", G.velocity_layout.slices, "velocity"),
+                                   ("VN", "final", G.velocity_layout.slices, "velocity")):
+        base = lay.p_slices[key].start
+        for f, sl in zip(G.factors, slices):
+            for i in range(sl.start, sl.stop):
+                labels[base + i] = f"{end}.{getattr(f, attr)}"
+    labels[lay.p_slices["T"].start] = "horizon.T"
+    return labels
+
+
+def dependencies(tr: Transcription, x: np.ndarray, p: np.ndarray) -> list[np.ndarray]:
+    """The dependencies among the equality rows of g at (x, p): unit vectors y over those rows
+    with ``|J^T y| <= RANK_TOL`` (module docstring), as vectors over all rows of g."""
+    lbg, ubg = (np.array(v).ravel() for v in tr.bounds_function(p)[:2])
+    eq = np.flatnonzero(lbg == ubg)
+    if eq.size == 0:
+        return []
+    J = _csc(ca.DM(tr.solver.get_function("nlp_jac_g")(x, p)[1])).tocsr()[eq]
+    norms = np.sqrt(np.asarray(J.multiply(J).sum(axis=1)).ravel())
+    J = sp.diags(1.0 / np.where(norms > 0, norms, 1.0)) @ J
+    m, n = J.shape
+    K = sp.bmat([[GAMMA * sp.identity(n), J.T], [J, -DELTA * sp.identity(m)]]).tocsc()
+    lu = spl.splu(K)
+    Z = np.random.default_rng(0).standard_normal((n + m, min(PROBES, m)))
+    for _ in range(2):
+        Z = lu.solve(Z)
+        Z /= np.linalg.norm(Z, axis=0)
+    Y = np.linalg.qr(Z[n:])[0]
+    found = []
+    for y in Y.T:
+        if np.linalg.norm(J.T @ y) <= RANK_TOL:
+            full = np.zeros(len(lbg))
+            full[eq] = y / np.where(norms > 0, norms, 1.0)
+            found.append(full)
+    return found
+
+
+def dependent_conditions(tr: Transcription, x: np.ndarray, p: np.ndarray) -> list[str]:
+    """One sentence per dependency at (x, p), naming the prescribed values involved and the
+    one to leave free; [] when the equality rows are independent (LICQ holds)."""
+    deps = dependencies(tr, x, p)
+    if not deps:
+        return []
+    Jp = np.array(_jacobian_p(tr)(x, p))
+    labels, rows = parameter_labels(tr), tr.row_labels()
+    out: list[str] = []
+    for y in deps:
+        w = np.abs(y @ Jp)
+        hit = np.flatnonzero(w > 1e-6 * w.max(initial=0.0))
+        named = list(dict.fromkeys(labels[j] for j in hit
+                                   if not labels[j].startswith(("parameters.", "p["))))
+        finals = [n for n in named if n.startswith("final.")]
+        if finals:
+            others = [n for n in named if n != finals[-1]]
+            text = (f"{finals[-1]} is implied by {', '.join(others) or 'the other conditions'} "
+                    "and the equations of motion (e.g. a conservation law): leave "
+                    f"{finals[-1]} free")
+        else:
+            big = np.flatnonzero(np.abs(y) > 1e-3 * np.abs(y).max())
+            involved = list(dict.fromkeys(rows[i].split(" at ")[0] for i in big))
+            text = (f"the constraints {', '.join(involved[:4])} are dependent (LICQ fails): "
+                    "remove a redundant constraint")
+        if text not in out:
+            out.append(text)
+    return out

@@ -1,0 +1,62 @@
+"""The figure of every problem file: solve each file in problems/ as `ocgroupoid solve` does
+(its own N, scheme and solver options) and draw it with `og.plot`.
+
+Writes results/figures/<name>.png (shown in the README) and results/figures/figures.json
+(status, cost, N, T and the seconds of each solve). ``--quick`` solves at N = 32 (CI).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from _bench import RESULTS, progress, save  # noqa: E402
+
+import ocgroupoid as og  # noqa: E402
+from ocgroupoid import files  # noqa: E402
+
+PROBLEMS = Path(__file__).resolve().parent.parent / "problems"
+QUICK_N = 32  # the coarsest grid on which every problem file is verified (heavy top)
+
+
+def solve_file(path: Path, quick: bool) -> og.Solution:
+    """A problem file solved with its own settings (N = QUICK_N when ``quick``)."""
+    cfg = files.load(path, [f"horizon.N={QUICK_N}"] if quick else [])
+    f, d = cfg.file, cfg.file.discretization
+    solver = og.compile(files.build(cfg), f.horizon.N, d.retraction, d.rule, f.solver.ipopt,
+                        d.scheme, d.steps)
+    return solver.solve(multistart=f.solver.multistart,
+                        continuation=f.solver.continuation or None)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", type=Path, default=RESULTS / "figures", help="folder for the PNGs")
+    ap.add_argument("--quick", action="store_true", help=f"N = {QUICK_N} (CI)")
+    args = ap.parse_args()
+    args.out.mkdir(parents=True, exist_ok=True)
+    paths = sorted(PROBLEMS.glob("*.yaml"))
+    rows: dict[str, Any] = {}
+    with progress() as bar:
+        task = bar.add_task("solving and plotting", total=len(paths))
+        for path in paths:
+            bar.update(task, description=f"{path.stem}")
+            t0 = time.perf_counter()
+            sol = solve_file(path, args.quick)
+            og.plot(sol, args.out / f"{path.stem}.png")
+            rows[path.stem] = {"status": sol.status, "success": sol.success, "cost": sol.cost,
+                               "N": sol.N, "T": sol.T, "seconds": time.perf_counter() - t0}
+            bar.advance(task)
+    save(args.out, "figures", {"quick": args.quick, "problems": rows})
+    failed = [name for name, r in rows.items() if not r["success"]]
+    if failed:
+        sys.exit(f"not solved: {', '.join(failed)}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,151 @@
+"""Success means verified (ocgroupoid.solve.verdict): dependent conditions, under-resolved
+grids and extreme parameters are not reported as clean successes; Ctrl-C and progress."""
+
+from __future__ import annotations
+
+import importlib
+import os
+import signal
+import sys
+import threading
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import ocgroupoid as og
+from ocgroupoid import files
+from ocgroupoid.models.heavy_top import heavy_top
+from ocgroupoid.models.rigid_body import rigid_body
+from ocgroupoid.solve.dependencies import dependent_conditions
+from ocgroupoid.solve.verdict import check_tolerance, suggested_N
+
+sys.path.insert(0, str(Path(__file__).parent))
+from test_bounds_time import minimum_time  # noqa: E402
+
+PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
+WHEELS = PROBLEMS / "reaction_wheels.yaml"
+
+
+def solve_file(path: Path, *sets: str, **kwargs) -> og.Solution:
+    cfg = files.load(path, list(sets))
+    d = cfg.file.discretization
+    return og.solve(files.build(cfg), cfg.file.horizon.N, d.retraction, d.rule,
+                    cfg.file.solver.ipopt, d.scheme, d.steps, **kwargs)
+
+
+def test_redundant_final_condition_is_named_and_not_a_success() -> None:
+    """Zero total momentum: Omega(T) = 0 implies dphi(T) = 0; prescribing both is reported."""
+    sol = solve_file(WHEELS, "final.dphi=[0,0,0]", "horizon.N=16", multistart=False)
+    assert not sol.success
+    assert "final.dphi is implied by" in sol.hint and "final.Omega" in sol.hint
+    assert "leave final.dphi free" in sol.hint
+
+
+def test_without_the_redundant_condition_the_wheels_solve_cleanly() -> None:
+    sol = solve_file(WHEELS, "horizon.N=16", multistart=False)
+    assert sol.success, sol.hint
+    assert sol.diagnostics["verdict"] == {"verified": True, "failures": [],
+                                          "check_tolerance": check_tolerance({"tol": 1e-10}),
+                                          "replay_tolerance": 0.05}
+
+
+def test_rank_test_finds_nothing_on_independent_conditions() -> None:
+    solver = og.compile(rigid_body(), N=16)
+    sol = solver.solve(multistart=False)
+    tr = solver.transcription
+    assert sol.success and dependent_conditions(tr, sol.x, sol.p) == []
+
+
+def test_underactuated_slew_has_implied_final_components() -> None:
+    """Only u3 acts on a rest-to-rest turn about e3: the components about e1, e2 are implied."""
+    sol = og.solve(minimum_time(), N=9, multistart=False)
+    assert sol.status == "Solve_Succeeded" and not sol.success
+    assert "is implied by" in sol.hint
+
+
+@pytest.mark.parametrize("path", sorted(PROBLEMS.glob("*.yaml")), ids=lambda p: p.stem)
+def test_wildly_under_resolved_grid_is_not_a_clean_success(path: Path) -> None:
+    """N = 2 (one or two steps for the whole motion): never a clean success; where IPOPT
+    solves, the hint names the cause and a finer grid."""
+    sol = solve_file(path, "horizon.N=2", "solver.continuation=[]", multistart=False)
+    assert not sol.success, (sol.status, sol.diagnostics.get("replay"))
+    assert sol.hint
+    if sol.status == "Solve_Succeeded":
+        assert "increase N" in sol.hint or "is implied by" in sol.hint, sol.hint
+
+
+@pytest.mark.parametrize("sets", [
+    ("parameters.inertia=[1000,1,0.001]",),
+    ("horizon.N=8", "initial.Omega=[0, 0, 4]"),
+], ids=["extreme inertia", "2 rad per step"])
+def test_extreme_instances_are_not_clean_successes(sets: tuple[str, ...]) -> None:
+    """Issue 19, item 4: these reported Solve_Succeeded while the plan missed by radians."""
+    sol = solve_file(PROBLEMS / "so3_rest_to_rest.yaml", *sets, multistart=False)
+    assert not sol.success
+    assert "does not land" in sol.hint and "increase N to" in sol.hint
+
+
+def test_a_resolved_grid_lands_within_the_tolerance() -> None:
+    sol = solve_file(PROBLEMS / "so3_rest_to_rest.yaml", multistart=False)
+    assert sol.success
+    rep = sol.diagnostics["replay"]
+    assert rep["max_terminal_error"] < 1e-3 and rep["integration_error"] < 1e-6
+
+
+def test_a_tighter_replay_tolerance_fails_a_coarse_grid() -> None:
+    loose = solve_file(PROBLEMS / "so3_rest_to_rest.yaml", "horizon.N=16", multistart=False)
+    tight = solve_file(PROBLEMS / "so3_rest_to_rest.yaml", "horizon.N=16", multistart=False,
+                       replay_tolerance=1e-4)
+    assert loose.success and not tight.success and "does not land" in tight.hint
+
+
+def test_suggested_grid_grows_with_the_miss_and_shrinks_with_the_order() -> None:
+    assert suggested_N(8, 1.5, 2) == 16
+    assert suggested_N(8, 100.0, 2) > suggested_N(8, 100.0, 4) >= 16
+
+
+def test_default_cli_call_finds_the_better_minimum_of_a_new_instance(tmp_path: Path) -> None:
+    """A slew not in problems/ (other inertia, initial spin, target): the geodesic start
+    converges to a worse minimum; the default CLI call (multi-start) finds the better one."""
+    from typer.testing import CliRunner
+
+    from ocgroupoid.cli import app
+    sets = ["parameters.inertia=[1.0, 1.5, 2.5]", "initial.Omega=[0.3, 0.0, -3.0]",
+            "final.R={axis_angle: {axis: [0, 0, 1], angle: 2.8}}", "horizon.T=2.0",
+            "horizon.N=48"]
+    single = solve_file(PROBLEMS / "so3_rest_to_rest.yaml", *sets, multistart=False)
+    out = tmp_path / "sol.json"
+    args = ["solve", str(PROBLEMS / "so3_rest_to_rest.yaml"), "--out", str(out), "-q"]
+    r = CliRunner().invoke(app, [*args, *(a for s in sets for a in ("--set", s))])
+    assert r.exit_code == 0, r.output
+    default = og.Solution.from_json(out)
+    assert single.success and default.success
+    assert default.cost < 0.9 * single.cost
+    assert default.starts > 1 and len(default.minima) >= 2
+
+
+def test_progress_reports_ipopt_iterations(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The iteration callback reaches ``progress``: iteration, objective, infeasibility."""
+    monkeypatch.setattr(importlib.import_module("ocgroupoid.solve.solver"), "PROGRESS_EVERY",
+                        0.0)
+    heard: list[str] = []
+    og.compile(heavy_top(), N=32).solve(multistart=False, progress=heard.append)
+    lines = [h for h in heard if "iteration" in h]
+    assert lines and "objective" in lines[-1] and "infeasibility" in lines[-1]
+
+
+def test_ctrl_c_stops_the_solve_with_the_best_point_so_far() -> None:
+    """SIGINT during IPOPT: the starts stop, status interrupted, success false, no raise."""
+    solver = og.compile(heavy_top(), N=128)
+    solver.solve(multistart=False)  # build the watched solver once
+    pid = os.getpid()
+    timer = threading.Timer(0.3, lambda: os.kill(pid, signal.SIGINT))
+    timer.start()
+    try:
+        sol = solver.solve(multistart=12)
+    finally:
+        timer.cancel()
+    assert sol.status == "interrupted" and not sol.success
+    assert sol.starts < 12 and np.all(np.isfinite(sol.x))
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
