@@ -221,8 +221,14 @@ def plot(
     import json
 
     from .plotting import plot as plot_figure
+    from .solve.outputs import check_file
     from .solve.solution import Solution
 
+    try:
+        check_file(out_path, "--out", "figure.png")
+    except OcgError as e:
+        fail(str(e))
+        return
     if solution.is_dir():
         from .sweep import plot_sweep
         try:

@@ -118,6 +118,18 @@ def test_check_names_a_redundant_boundary_condition(tmp_path) -> None:
     assert "final.p" in " ".join(r.output.split()) and "redundant" in r.output
 
 
+def test_check_names_a_condition_implied_only_on_the_feasible_set() -> None:
+    """Issue 15: with zero total momentum Omega(T) = 0 implies dphi(T) = 0; at a generic
+    point the rows are independent ("redundant: none" before), at a short solve they are not."""
+    wheels = SO3.parent / "reaction_wheels.yaml"
+    r = runner.invoke(app, ["check", str(wheels), "--set", "final.dphi=[0, 0, 0]"])
+    assert r.exit_code == 2
+    text = " ".join(r.output.split())
+    assert "final.dphi is implied by" in text and "final.Omega" in text
+    clean = runner.invoke(app, ["check", str(wheels)])
+    assert clean.exit_code == 0 and "redundant" in clean.output and "implied" not in clean.output
+
+
 def test_plot_writes_a_png(tmp_path) -> None:
     out = tmp_path / "sol.json"
     assert runner.invoke(app, ["solve", str(SO3), "-q", "--set", "horizon.N=16", "--out",

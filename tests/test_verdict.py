@@ -100,6 +100,23 @@ def test_a_tighter_replay_tolerance_fails_a_coarse_grid() -> None:
     assert loose.success and not tight.success and "does not land" in tight.hint
 
 
+def test_exp_retraction_survives_a_zero_step() -> None:
+    """Issue 19.2: with final.R free the optimum has steps of exactly zero; the exp rule's
+    guarded sqrt keeps its Jacobian finite (it was Invalid_Number_Detected at iteration 0)."""
+    sol = solve_file(PROBLEMS / "so3_rest_to_rest.yaml", "final.R=null", "horizon.N=16",
+                     "discretization.retraction=exp", multistart=False)
+    assert sol.status == "Solve_Succeeded" and sol.success, sol.hint
+    assert np.allclose(sol.controls, 0.0, atol=1e-8)
+
+
+def test_heavy_top_solves_with_the_first_order_retraction() -> None:
+    """Issue 19.3: the conservation-law check samples steps inside the retraction's domain
+    (it sampled |a| ~ 1.6, where the first-order rule is undefined, and always failed)."""
+    sol = solve_file(PROBLEMS / "heavy_top_rotors.yaml", "horizon.N=64",
+                     "discretization.retraction=first_order", multistart=False)
+    assert sol.status == "Solve_Succeeded" and sol.success, sol.hint
+
+
 def test_suggested_grid_grows_with_the_miss_and_shrinks_with_the_order() -> None:
     assert suggested_N(8, 1.5, 2) == 16
     assert suggested_N(8, 100.0, 2) > suggested_N(8, 100.0, 4) >= 16
@@ -149,3 +166,31 @@ def test_ctrl_c_stops_the_solve_with_the_best_point_so_far() -> None:
     assert sol.status == "interrupted" and not sol.success
     assert sol.starts < 12 and np.all(np.isfinite(sol.x))
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+UNREACHABLE = """\
+model: custom
+definition:
+  groupoid: [{type: pair, dim: 2, state: p, velocity: v}]
+  lagrangian: "0.5 * dot(v, v)"
+  actuated: ["v[0]"]
+  controls: [u]
+  cost: "0.5 * dot(u, u)"
+horizon: {T: 1.0, N: 16}
+initial: {p: [0.0, 0.0], v: [0.0, 0.0]}
+final: {p: [1.0, 1.0], v: [0.0, 0.0]}
+"""
+
+
+def test_an_unreachable_target_is_named_not_blamed_on_the_start(tmp_path: Path) -> None:
+    """Issue 15: only x is actuated, so p_y(T) = p_y(0) + T v_y(0) = 0 cannot become 1. The
+    hint was "IPOPT lost feasibility: try multistart"; it now names the implied condition
+    (rank test at the last iterate) and the row violated most."""
+    f = tmp_path / "unreachable.yaml"
+    f.write_text(UNREACHABLE)
+    sol = solve_file(f, multistart=True)
+    assert not sol.success and sol.status in ("Restoration_Failed",
+                                              "Infeasible_Problem_Detected")
+    assert "final.v is implied by" in sol.hint and "final.p" in sol.hint
+    assert "an unactuated direction" in sol.hint
+    assert "violated most at the last iterate: final.p" in sol.hint

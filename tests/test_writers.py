@@ -276,6 +276,25 @@ def test_sweep_checks_its_folder_first(tmp_path: Path) -> None:
     assert r.exit_code == 2 and "cannot write in the folder" in one_line(r.output), r.output
 
 
+def test_plot_checks_its_path_before_drawing(tmp_path: Path) -> None:
+    """`plot --out` a folder or under a file was a traceback (IsADirectoryError,
+    FileExistsError); `og.plot(sol, path)` raises the same ConfigError."""
+    import ocgroupoid as og
+
+    sol = tmp_path / "sol.json"
+    assert runner.invoke(app, ["solve", str(SO3), "-q", "--set", "horizon.N=8", "--set",
+                               "solver.multistart=false", "--out", str(sol)]).exit_code == 0
+    regular = tmp_path / "regular.txt"
+    regular.write_text("x")
+    for out, says in ((tmp_path, "is a folder"), (regular / "f.png", "is a file, not a folder")):
+        r = runner.invoke(app, ["plot", str(sol), "--out", str(out)])
+        assert r.exit_code == 2 and says in one_line(r.output), r.output
+        assert "Traceback" not in r.output
+        with pytest.raises(ConfigError, match=says):
+            og.plot(og.Solution.from_json(sol), out)
+    assert regular.read_text() == "x"
+
+
 # ------------------------------------------------------------------ list and check
 
 

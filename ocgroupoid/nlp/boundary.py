@@ -30,6 +30,7 @@ import casadi as ca
 import numpy as np
 
 from ..errors import BoundaryError, ConfigError
+from ..lie.retraction import Retraction
 from ..model.mechanics import anchor
 from ..model.problem import Problem
 from .layout import Layout, Masks
@@ -126,7 +127,8 @@ class FinalConditions:
         for f, r, ts, mask in zip(G.factors, self.stages.retractions, G.target_layout.slices,
                                   m.end_state):
             s0 = np.asarray(f.state_of_target(start[ts]), dtype=float)
-            s = np.asarray(f.step(s0, r, rng.normal(size=f.algebra_dim)), dtype=float).ravel()
+            s = np.asarray(f.step(s0, r, _inside(r, rng.normal(size=f.algebra_dim))),
+                           dtype=float).ravel()
             if prescribed and mask.any():
                 goal = np.asarray(f.state_of_target(end[ts]), dtype=float)
                 s = np.where(mask, goal, s) if f.componentwise else goal
@@ -232,3 +234,11 @@ def _rank(M: np.ndarray, scale: float) -> int:
 
 def _count(n: int) -> str:
     return {1: "one", 2: "two", 3: "three", 4: "four"}.get(n, str(n))
+
+
+def _inside(ret: Retraction, a: np.ndarray) -> np.ndarray:
+    """The random step ``a`` shrunk into the retraction's domain: a turn of at most half its
+    :attr:`~ocgroupoid.lie.retraction.Retraction.step_limit` (the first-order rule is
+    undefined from |a| = 1, Cayley singular at pi)."""
+    n, most = float(ret.step_norm(a)), 0.5 * ret.step_limit
+    return a * (most / n) if n > most else a

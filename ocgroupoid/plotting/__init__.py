@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from ..solve import solution as _solution
+from ..solve.outputs import check_file
 from ..solve.solution import Solution, write_atomic
 from .figure import figure
 from .panels import Panel, panels
@@ -23,7 +24,10 @@ DPI = 110
 def plot(solution: Solution, path: str | Path | None = None, dpi: int = DPI) -> Any:
     """The figure of a Solution (a ``matplotlib.figure.Figure``, no pyplot state): the
     panels of :func:`~ocgroupoid.plotting.panels.panels` in two columns; with ``path``, also
-    written there as a PNG (atomically)."""
+    written there as a PNG (atomically; a folder, or a path under a file, is a ConfigError
+    raised before drawing)."""
+    if path is not None:
+        path = check_file(path, "plot path", "figure.png")
     fig = figure(solution, panels(solution))
     if path is not None:
         buf = io.BytesIO()

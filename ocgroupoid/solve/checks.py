@@ -9,6 +9,12 @@ path itself can be a singular point of the end-point map, e.g. for the rolling b
 fixed plate, where no boundary condition is redundant); each vector of its left null space
 is a dependency among constraint rows, reported by the boundary conditions it involves (a
 redundant boundary condition makes LICQ fail and IPOPT stall).
+
+A condition redundant only on the feasible set (implied through a conservation law, such as a
+reaction-wheel slew with zero total momentum and both ``Omega(T)`` and ``dphi(T)``
+prescribed) is invisible at a generic point; when the generic test finds nothing, the small
+grid is solved (one start, at most :data:`SMALL_ITER` iterations, tens of ms) and the rank
+test of :mod:`~ocgroupoid.solve.dependencies` runs at the point reached.
 """
 
 from __future__ import annotations
@@ -23,9 +29,11 @@ from ..model.problem import Problem
 from ..nlp.assembly import Kind
 from ..nlp.schemes import DEFAULT_RULE, DEFAULT_SCHEME
 from ..nlp.transcription import Discretization, Transcription
+from .dependencies import dependent_conditions
 from .guesses import geodesic_guesses, perturbed_guesses
 
 SMALL_N = 8
+SMALL_ITER = 100
 
 
 @dataclass
@@ -115,4 +123,14 @@ def check(problem: Problem, N: int, retraction: str = "cayley", rule: str = DEFA
     n_eq = len(equality_rows(tr, tr.pack()))
     small = tr if N <= SMALL_N else Transcription(problem, replace(disc, N=SMALL_N), ipopt)
     return CheckReport(tr.nx, blocks, tr.nx - n_eq, tr.ng - n_eq, given, free,
-                       redundant_rows(small))
+                       redundant_rows(small) or implied_conditions(problem, small.disc, ipopt))
+
+
+def implied_conditions(problem: Problem, disc: Discretization,
+                       ipopt: dict[str, Any] | None) -> list[str]:
+    """Conditions implied on the feasible set: the rank test at the point a short solve of
+    the small grid reaches (module docstring)."""
+    tr = Transcription(problem, disc, {**(ipopt or {}), "max_iter": SMALL_ITER})
+    p = tr.pack()
+    r = tr.solve(geodesic_guesses(tr, p)[0], p)
+    return dependent_conditions(tr, r.x, r.p)

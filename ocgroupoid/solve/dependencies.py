@@ -114,8 +114,8 @@ def dependent_conditions(tr: Transcription, x: np.ndarray, p: np.ndarray) -> lis
         if finals:
             others = [n for n in named if n != finals[-1]]
             text = (f"{finals[-1]} is implied by {', '.join(others) or 'the other conditions'} "
-                    "and the equations of motion (e.g. a conservation law): leave "
-                    f"{finals[-1]} free")
+                    "and the equations of motion (an unactuated direction or a conservation "
+                    f"law): leave {finals[-1]} free")
         else:
             big = np.flatnonzero(np.abs(y) > 1e-3 * np.abs(y).max())
             involved = list(dict.fromkeys(rows[i].split(" at ")[0] for i in big))

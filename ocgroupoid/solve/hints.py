@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..nlp.transcription import RawResult, Transcription
+from .dependencies import dependent_conditions
 
 HINTS = {
     "Infeasible_Problem_Detected": "the constraints and boundary conditions look incompatible: "
@@ -19,7 +20,9 @@ HINTS = {
     "Diverging_Iterates": "the iterates left every physical scale (|x| > 1e8): start from "
     "another guess (multistart, continuation) or raise solver.ipopt.diverging_iterates_tol if "
     "your variables are that large",
-    "Restoration_Failed": "IPOPT lost feasibility: try multistart or continuation",
+    "Restoration_Failed": "IPOPT could not reduce the constraint violation: try another start "
+    "(solver.multistart) or continuation; if every start fails, the final values may be "
+    "unreachable with these controls",
     "Search_Direction_Becomes_Too_Small": "the problem may be degenerate: check for redundant "
     "boundary conditions",
     "Error_In_Step_Computation": "the KKT matrix is singular: check for redundant boundary "
@@ -27,11 +30,22 @@ HINTS = {
 }
 
 
+#: statuses where the conditions could not be met: the rank test at the last iterate names the
+#: prescribed value that an unactuated direction or a conservation law fixes, and the row
+#: violated most is quoted
+UNMET = ("Restoration_Failed", "Infeasible_Problem_Detected",
+         "Search_Direction_Becomes_Too_Small", "Error_In_Step_Computation")
+
+
 def hint_for(tr: Transcription, r: RawResult, steps: np.ndarray) -> str:
     """The hint for a failed result; ``steps`` are its algebra increments (N x dim y)."""
     if r.success:
         return ""
     parts = [HINTS.get(r.status, "try multistart or continuation")]
+    if r.status in UNMET:
+        parts += [f"unreachable as posed: {d}, or prescribe the value the motion implies"
+                  for d in dependent_conditions(tr, r.x, r.p)]
+        parts.append(worst_violation(tr, r))
     G = tr.problem.groupoid
     for f, ret, vs in zip(G.factors, tr.scheme.retractions, G.velocity_layout.slices):
         step = float(np.max(ret.step_norm(steps[:, vs])))
@@ -39,3 +53,14 @@ def hint_for(tr: Transcription, r: RawResult, steps: np.ndarray) -> str:
             parts.append(f"{f.velocity} turns {step:.3g} rad in one step ({ret.name} "
                          f"is singular at {ret.step_limit:.2f}); increase N")
     return "; ".join(parts)
+
+
+def worst_violation(tr: Transcription, r: RawResult) -> str:
+    """The constraint row the last iterate violates most, named (``final.p (component 1)``)."""
+    g = np.array(tr.g_fun(r.x, r.p)).ravel()
+    lbg, ubg = (np.array(v).ravel() for v in tr.bounds_function(r.p)[:2])
+    miss = np.maximum(lbg - g, g - ubg)
+    i = int(np.argmax(miss)) if miss.size else 0
+    if not miss.size or miss[i] <= 0:
+        return "the last iterate meets every constraint"
+    return f"violated most at the last iterate: {tr.row_labels()[i]} (by {miss[i]:.2g})"
