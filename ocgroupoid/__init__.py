@@ -29,13 +29,16 @@ from .lie import SE2, SE3, SO3, se2, se3
 from .model import GuessContext, Problem
 from .nlp import Discretization, Guess, Transcription
 from .plotting import plot  # registers Solution.plot; matplotlib loads on use
-from .solve import Solution, Solver, compile, solve
+from .solve import Solution, Solver, compile, solve, solve_to_accuracy
+from .solve.simulate import Simulation, simulate
 from .sweep import sweep  # Dask, pandas and pyarrow are imported when a sweep runs
 
 __all__ = [
     "lie", "so3", "Problem", "GuessContext", "Groupoid", "LieGroupFactor", "Pair",
     "SphereAction", "Discretization", "Transcription", "Guess", "Solver", "compile", "solve",
+    "solve_to_accuracy",
     "Solution", "OcgError", "ConfigError", "DimensionError", "SingularityError",
     "BoundaryError", "TranscriptionError", "SolverError", "export_c", "sweep", "__version__",
     "SO3", "SE3", "SE2", "se3", "se2", "plot",
+    "simulate", "Simulation",
 ]

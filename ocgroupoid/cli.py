@@ -18,6 +18,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
+from .bench.commands import bench
 from .errors import ConfigError, OcgError
 
 app = typer.Typer(no_args_is_help=True, add_completion=False, pretty_exceptions_enable=False,
@@ -25,6 +26,7 @@ app = typer.Typer(no_args_is_help=True, add_completion=False, pretty_exceptions_
 out = Console()
 err = Console(stderr=True, soft_wrap=True)
 
+app.add_typer(bench, name="bench")  # ocgroupoid bench work-precision | stability
 SET_HELP = "Override any key: KEY=VALUE, the value read as YAML (e.g. horizon.N=128)."
 
 
@@ -57,7 +59,8 @@ def summary(sol: Any) -> Table:
     t.add_row("IPOPT time, best start", f"{sol.solve_seconds * 1e3:.1f} ms")
     if sol.starts > 1:
         t.add_row(f"IPOPT time, all {sol.starts} starts", f"{sol.ipopt_seconds_total * 1e3:.1f} ms")
-    t.add_row("EL residual (max over nodes)", f"{d['euler_lagrange_residual_max']:.2e}")
+    t.add_row("EL residual (max over nodes)", f"{d['euler_lagrange_residual_max']:.2e}"
+              if "euler_lagrange_residual_max" in d else "none: the scheme is not variational")
     t.add_row("distance from manifold",
               ", ".join(f"{k} {v:.1e}" for k, v in d["manifold_distance"].items()))
     if d["final_residual"]:
@@ -77,6 +80,17 @@ def summary(sol: Any) -> Table:
                                                      rep["terminal_error"].items()))
     elif rep.get("reason"):
         t.add_row("replay", rep["reason"])
+    if "error_estimate" in d:
+        e = d["error_estimate"]
+        t.add_row("error estimate (cost)", f"{e['cost_relative']:.1e} relative ({e['cost']:.2e}"
+                  f"), Richardson from N={e['N'][0]} and {e['N'][1]}, order {e['order']:.2g}")
+    if "accuracy" in d:
+        acc = d["accuracy"]
+        t.add_row("N: auto", f"{acc['message']} ({acc['ipopt_seconds']:.2f} s in IPOPT)")
+        if len(acc["schemes"]) > 1:
+            t.add_row("schemes tried", ", ".join(
+                f"{k} {'met' if v['met'] else v['stopped']} ({v['ipopt_seconds']:.2f} s IPOPT)"
+                for k, v in acc["schemes"].items()))
     if len(sol.minima) > 1:
         t.add_row("local minima", ", ".join(f"{m['cost']:.6g} ({m['label']})"
                                             for m in sol.minima))
@@ -104,13 +118,16 @@ def solve(
         problem = files.build(cfg)
         d = f.discretization
         t0 = time.perf_counter()
-        with _status("building the NLP...", quiet):
-            solver = compile_problem(problem, f.horizon.N, d.retraction, d.rule, f.solver.ipopt,
-                                     d.scheme, d.steps)
-        with _status("solving...", quiet) as status:
-            sol = solver.solve(multistart=f.solver.multistart,
-                               continuation=f.solver.continuation or None,
-                               progress=status.update if status is not None else _silent)
+        if f.horizon.N == "auto":
+            sol = _solve_to_accuracy(problem, f, quiet)
+        else:
+            with _status("building the NLP...", quiet):
+                solver = compile_problem(problem, f.horizon.N, d.retraction, d.rule,
+                                         f.solver.ipopt, d.scheme, d.steps, f.solver.jit)
+            with _status("solving...", quiet) as status:
+                sol = solver.solve(multistart=f.solver.multistart,
+                                   continuation=f.solver.continuation or None,
+                                   progress=status.update if status is not None else _silent)
         if target is not None:
             sol.to_json(target)
         if picture is not None:
@@ -125,8 +142,10 @@ def solve(
         return
     if not quiet:
         out.print(summary(sol))
-        out.print(f"total {time.perf_counter() - t0:.2f} s (build, {sol.starts} IPOPT "
-                  f"start{'s' if sol.starts > 1 else ''}, diagnostics)"
+        grids = len(sol.diagnostics.get("accuracy", {}).get("levels", []))
+        out.print(f"total {time.perf_counter() - t0:.2f} s (build, "
+                  + (f"{grids} grids" if grids else f"{sol.starts} IPOPT start"
+                     f"{'s' if sol.starts > 1 else ''}") + ", diagnostics)"
                   + (f"; solution written to {target}" if target else ""))
     from rich.markup import escape
     if sol.status == "interrupted":
@@ -135,8 +154,36 @@ def solve(
         raise typer.Exit(130)
     if not sol.success:
         what = "not verified" if sol.status == "Solve_Succeeded" else f"solver failed: {sol.status}"
+        if sol.diagnostics.get("accuracy", {}).get("met") is False:
+            what = "accuracy not reached"
         err.print(f"[bold red]{what}:[/] {escape(sol.hint)}")
         raise typer.Exit(1)
+
+
+def _solve_to_accuracy(problem: Any, f: Any, quiet: bool) -> Any:
+    """``horizon.N: auto``: the grid search of :mod:`ocgroupoid.solve.auto`, one line per
+    grid on stderr as it is done."""
+    from .solve import solve_to_accuracy
+
+    d, s = f.discretization, f.solver
+    with _status("searching N...", quiet) as status:
+        return solve_to_accuracy(
+            problem, s.accuracy, s.replay_accuracy, d.scheme, d.retraction, d.rule, s.ipopt,
+            s.multistart, *f.horizon.grids,
+            progress=status.update if status is not None else _silent,
+            report=_silent if quiet else lambda level: err.print(grid_line(level),
+                                                                 highlight=False))
+
+
+def grid_line(level: Any) -> str:
+    """One grid of ``N: auto``: cost, error estimate, replay error, verdict and time."""
+    est = "-" if level.estimate is None else f"{level.estimate:.1e} (order {level.order:.2g})"
+    replay = "-" if level.replay_error is None else f"{level.replay_error:.1e}"
+    verdict = "verified" if level.verified else level.status if \
+        level.status != "Solve_Succeeded" else "not verified"
+    return (f"{level.scheme} N={level.N}: cost {level.cost:.10g}, estimated error {est}, "
+            f"replay error {replay}, {verdict}, {level.seconds:.2f} s"
+            + (" — target met" if level.met else ""))
 
 
 def _solve_outputs(out_path: Optional[Path], plot_path: Optional[Path],
@@ -169,6 +216,7 @@ def check(
     Exits 2 when the file is invalid or a boundary condition is redundant.
     """
     from . import files
+    from .solve.auto import AUTO_SCHEMES
     from .solve.checks import check as run_check
 
     try:
@@ -176,15 +224,19 @@ def check(
         f = cfg.file
         d = f.discretization
         problem = files.build(cfg)
-        report = run_check(problem, f.horizon.N, d.retraction, d.rule, f.solver.ipopt,
-                           d.scheme, d.steps)
+        # N: auto is checked on its first grid, with the first scheme scheme: auto tries
+        N = f.horizon.grids[0] if f.horizon.N == "auto" else f.horizon.N
+        scheme = AUTO_SCHEMES[0] if d.scheme == "auto" else d.scheme
+        report = run_check(problem, N, d.retraction, d.rule, f.solver.ipopt, scheme, d.steps)
     except OcgError as e:
         fail(str(e))
         return
     # a retraction acts on group factors only: on R^n every retraction is the translation
     retraction = f", {d.retraction}" if _has_group_factor(problem) else ""
-    t = Table(title=f"{cfg.name}: model {f.model}, N={f.horizon.N}, T={f.horizon.T}, "
-                    f"{d.scheme}{retraction}", show_header=False)
+    t = Table(title=f"{cfg.name}: model {f.model}, N={N}, T={f.horizon.T}, "
+                    f"{scheme}{retraction}" + (" (the first grid of N: auto)"
+                                               if f.horizon.N == "auto" else ""),
+              show_header=False)
     t.add_column(style="bold")
     t.add_column()
     t.add_row("variables", str(report.variables))
@@ -334,11 +386,12 @@ def export_c_command(
 
     try:
         cfg = files.load(file, set_)
+        N = files.fixed_grid(cfg, "export-c")
         claim_folder(out_dir, force, "--out")
         f = cfg.file
         d = f.discretization
         with _status("exporting C code...", False):
-            done = export_c(files.build(cfg), out_dir, f.horizon.N, d.retraction, d.rule,
+            done = export_c(files.build(cfg), out_dir, N, d.retraction, d.rule,
                             f.solver.ipopt, scheme=d.scheme, steps=d.steps, force=force,
                             positive=positive_parameters(cfg.spec.parameters))
         if build:

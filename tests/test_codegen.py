@@ -68,7 +68,8 @@ class Case:
 
 
 CASES = [Case(c) for c in [*PROBLEMS, SPHERE_AND_PAIR]] + \
-    [Case(ROOT / "problems" / f"{name}.yaml", "order4") for name in ORDER4]
+    [Case(ROOT / "problems" / f"{name}.yaml", "order4") for name in ORDER4] + \
+    [Case(ROOT / "problems" / "plate_ball.yaml", "rk4_euler")]  # a baseline exports too
 
 
 def case_id(case: Case) -> str:

@@ -27,7 +27,12 @@ def test_every_variable_is_used_and_licq_holds(factory, scheme: str) -> None:
     solver = og.compile(factory(), N=12, scheme=scheme)
     tr = solver.transcription
     sol = solver.solve(multistart=factory is rolling, replay=False)
-    assert sol.success, sol.status
+    if scheme in og.nlp.schemes.BASELINES:  # solved, but a quaternion drifts off SO(3)
+        failures = sol.diagnostics["verdict"]["failures"]
+        assert sol.status == "Solve_Succeeded" and all(
+            "off its manifold" in f or "off SO(3)" in f for f in failures), failures
+    else:
+        assert sol.success, sol.status
     J = np.array(ca.DM(tr.solver.get_function("nlp_jac_g")(sol.x, sol.p)[1]))
     H = np.array(ca.DM(tr.solver.get_function("nlp_hess_l")(sol.x, sol.p, 1.0,
                                                              np.ones(tr.ng))))

@@ -18,6 +18,8 @@ left out, or written null (also per component: ``[0, 0, null]``), is free. A num
 ``parameters``, ``initial`` and ``final`` may be written as an expression of constants, as in
 expressions: ``theta: [pi]``, ``angle: pi/2``. What the machine can take is checked too
 (:mod:`~ocgroupoid.files.limits`): N within a memory estimate, an installed linear solver.
+``horizon.N: auto`` with ``solver.accuracy`` (or ``solver.replay_accuracy``) leaves N to the
+search of :mod:`~ocgroupoid.solve.auto` (its keys checked together by :func:`check_auto`).
 """
 
 from __future__ import annotations
@@ -37,6 +39,7 @@ from ..models.registry import ModelSpec
 from . import bounds, limits
 from .custom import Definition, spec as custom_spec
 from .expressions import CONSTANTS, FUNCTIONS, compile_expression
+from ..nlp.schemes import SCHEME_NAMES
 from .messages import validate
 from .schema import ProblemFile
 from .source import Locator, apply_override, read_yaml
@@ -75,7 +78,8 @@ def load(path: str | Path | None = None, overrides: list[str] | None = None,
         if key in data:
             data[key] = constants(data[key], (key,), locate)
     top = validate(ProblemFile, data, (), locate)
-    finer = [n for n in top.solver.continuation if n >= top.horizon.N]
+    check_auto(top, locate)
+    finer = [n for n in top.solver.continuation if n >= top.horizon.N]  # none with N: auto
     if finer:
         raise ConfigError(f"{locate('solver', 'continuation')}: solver.continuation {finer} "
                           f"must be coarser than horizon.N = {top.horizon.N}; lower or drop "
@@ -105,6 +109,47 @@ def load(path: str | Path | None = None, overrides: list[str] | None = None,
 
 
 CONSTANT_SECTIONS = ("parameters", "initial", "final")  # numbers may be written as pi/2
+
+
+def check_auto(top: ProblemFile, locate: Locator) -> None:
+    """The keys of ``horizon.N: auto`` (:mod:`~ocgroupoid.solve.auto`) go together: it needs
+    a target (``solver.accuracy`` or ``solver.replay_accuracy``), the targets and
+    ``scheme: auto`` need it, and it replaces ``solver.continuation`` and adaptive steps."""
+    s, d = top.solver, top.discretization
+    targets = [k for k in ("accuracy", "replay_accuracy") if getattr(s, k) is not None]
+    if top.horizon.N != "auto":
+        if targets:
+            raise ConfigError(f"{locate('solver', targets[0])}: solver.{targets[0]} is the "
+                              "target of horizon.N: auto; write N: auto, or remove it")
+        if d.scheme == "auto":
+            raise ConfigError(f"{locate('discretization', 'scheme')}: scheme: auto is chosen "
+                              "with horizon.N: auto; write N: auto, or choose one of "
+                              f"{', '.join(SCHEME_NAMES)}")
+        return
+    if not targets:
+        raise ConfigError(f"{locate('horizon', 'N')}: horizon.N: auto needs a target: "
+                          "solver.accuracy (a relative cost error, e.g. 1.0e-6) or "
+                          "solver.replay_accuracy (the replay's terminal error); add one")
+    if s.continuation:
+        raise ConfigError(f"{locate('solver', 'continuation')}: horizon.N: auto solves its own "
+                          "grids, each from the one before; remove solver.continuation")
+    if d.steps == "adaptive":
+        raise ConfigError(f"{locate('discretization', 'steps')}: horizon.N: auto compares "
+                          "uniform grids; remove steps: adaptive or give a fixed N")
+
+
+def fixed_grid(cfg: Config, command: str) -> int:
+    """``horizon.N``, refused with the fix when it is ``auto`` (``command`` needs one grid)."""
+    f = cfg.file
+    if f.horizon.N != "auto":
+        return f.horizon.N
+    sets = ["horizon.N=128"] + [f"solver.{k}=null" for k in ("accuracy", "replay_accuracy")
+                                if getattr(f.solver, k) is not None]
+    if f.discretization.scheme == "auto":
+        sets.append("discretization.scheme=order4")
+    raise ConfigError(f"{cfg.locate('horizon', 'N')}: {command} needs a fixed grid, not "
+                      "horizon.N: auto: run `ocgroupoid solve` to pick N, then write it, "
+                      f"e.g. {' '.join('--set ' + a for a in sets)}")
 
 
 def constants(value: Any, path: tuple, locate: Locator) -> Any:
@@ -142,7 +187,8 @@ def build(cfg: Config) -> Problem:
     pb = cfg.spec.build(cfg.parameters, cfg.initial, cfg.final, horizon.guess, cfg.name)
     starts = 0 if f.solver.multistart is False else \
         3 if f.solver.multistart is True else int(f.solver.multistart)
-    limits.check_size(pb, horizon.N, starts, locate("horizon", "N"))
+    limits.check_size(pb, horizon.grids[1] if horizon.N == "auto" else horizon.N, starts,
+                      locate("horizon", "N"))
     try:
         if horizon.T == "free":
             pb.horizon(horizon.guess, free=True, T_min=horizon.T_min, T_max=horizon.T_max)

@@ -8,11 +8,13 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from pydantic import BeforeValidator, Field, model_validator
+from pydantic import BeforeValidator, Field, StrictBool, model_validator
+from pydantic_core import PydanticCustomError
 
 from ..lie.retraction import RETRACTION_NAMES
 from ..model.values import Strict, number, positive
 from ..nlp.schemes import SCHEME_NAMES
+from ..solve.auto import ACCURACY_MAX, N_MAX, N_MIN
 
 
 #: the final times a problem file may state (seconds, or the model's unit of time): beyond
@@ -57,6 +59,28 @@ def _multistart(v: Any) -> bool | int:
     return v
 
 
+def _intervals(v: Any) -> Any:
+    """A number of intervals >= 2 (no float, no boolean), or ``auto``."""
+    if v == "auto":
+        return v
+    if isinstance(v, str):
+        raise PydanticCustomError("literal_error", "", {"expected": "an integer >= 2 or 'auto'"})
+    if isinstance(v, bool) or not isinstance(v, int):
+        raise PydanticCustomError("int_from_float" if isinstance(v, float) else "int_type", "")
+    if v < 2:
+        raise PydanticCustomError("greater_than_equal", "", {"ge": 2})
+    return v
+
+
+def _accuracy(v: Any) -> float:
+    """A relative error in (0, :data:`~ocgroupoid.solve.auto.ACCURACY_MAX`]."""
+    x = number(v, "accuracy")
+    if not 0 < x <= ACCURACY_MAX:
+        raise ValueError(f"accuracy = {x:g} is outside (0, {ACCURACY_MAX:g}]: it is the "
+                         "relative error of the cost to reach, e.g. 1.0e-6")
+    return x
+
+
 def _nonnegative(v: Any, what: str = "value") -> float:
     x = number(v, what)
     if x < 0:
@@ -75,7 +99,13 @@ class Horizon(Strict):
     T: Annotated[Any, BeforeValidator(_final_time)] = Field(
         description=f"final time (in [{T_RANGE[0]:g}, {T_RANGE[1]:g}]), or free: a decision "
         "variable within [T_min, T_max]")
-    N: Annotated[int, Field(strict=True, ge=2, description="number of intervals (>= 2)")]
+    N: Annotated[int | Literal["auto"], BeforeValidator(_intervals)] = Field(
+        description="number of intervals (>= 2), or auto: the smallest N = N_min 2^k whose "
+        "estimated error meets solver.accuracy / solver.replay_accuracy")
+    N_min: Annotated[int, Field(strict=True, ge=2)] | None = Field(
+        None, description=f"N: auto only: the first grid (default {N_MIN})")
+    N_max: Annotated[int, Field(strict=True, ge=2)] | None = Field(
+        None, description=f"N: auto only: the largest grid (default {N_MAX})")
     T_min: Time | None = Field(None, description="lower bound of a free T")
     T_max: Time | None = Field(None, description="upper bound of a free T")
     T_guess: Time | None = Field(
@@ -92,7 +122,18 @@ class Horizon(Strict):
         elif self.T_min is not None or self.T_max is not None or self.T_guess is not None:
             raise ValueError("T_min, T_max and T_guess belong to T: free; remove them or "
                              "write T: free")
+        if self.N != "auto" and (self.N_min is not None or self.N_max is not None):
+            raise ValueError("N_min and N_max bound the grids of N: auto; remove them or "
+                             "write N: auto")
+        if not self.grids[0] <= self.grids[1]:
+            raise ValueError(f"N_min = {self.grids[0]} must be <= N_max = {self.grids[1]}")
         return self
+
+    @property
+    def grids(self) -> tuple[int, int]:
+        """The first and the largest grid of N: auto (defaults filled in)."""
+        return (self.N_min if self.N_min is not None else N_MIN,
+                self.N_max if self.N_max is not None else N_MAX)
 
     @property
     def guess(self) -> float:
@@ -113,8 +154,9 @@ class ObjectiveSection(Strict):
 class DiscretizationSection(Strict):
     """Scheme, retraction of the group factors and rule of the constraints."""
 
-    scheme: Literal[SCHEME_NAMES] = Field(  # type: ignore[valid-type]
-        "order2", description="discretisation scheme (ocgroupoid list shows them)")
+    scheme: Literal[(*SCHEME_NAMES, "auto")] = Field(  # type: ignore[valid-type]
+        "order2", description="discretisation scheme (ocgroupoid list shows them), or auto "
+        "(with horizon.N: auto): whichever meets the accuracy with less IPOPT time")
     retraction: Literal[RETRACTION_NAMES] = Field(  # type: ignore[valid-type]
         "cayley", description="cayley (default), exp, or first_order (the seeds' rule)")
     rule: str = Field("midpoint", description="discretisation rule of the constraints")
@@ -134,6 +176,15 @@ class SolverSection(Strict):
     continuation: list[Annotated[int, Field(strict=True, ge=2)]] = Field(
         default_factory=list, max_length=CONTINUATION_MAX,
         description=f"coarser N solved first, e.g. [16, 32] (at most {CONTINUATION_MAX})")
+    accuracy: Annotated[float, BeforeValidator(_accuracy)] | None = Field(
+        None, description=f"with horizon.N: auto: the relative error of the cost to reach, "
+        f"in (0, {ACCURACY_MAX:g}] (e.g. 1.0e-6), estimated by Richardson from two grids")
+    replay_accuracy: PositiveNumber | None = Field(
+        None, description="with horizon.N: auto: the largest terminal error of the replay "
+        "to reach, in the units the replay reports (rad, m, ...)")
+    jit: StrictBool = Field(
+        False, description="evaluate the NLP as C compiled by the system compiler (cached per "
+        "structure): worth it for repeated solves (multi-start, sweeps, large N)")
 
 
 class OutputSection(Strict):

@@ -31,6 +31,7 @@ from ..model.problem import Boundary, Problem
 from ..model.values import check_horizon
 from .assembly import Block, Kind, assemble
 from .boundary import FinalConditions
+from .jit import compiled
 from .layout import Layout, Masks
 from .parameters import ParameterValues
 from .schemes import DEFAULT_RULE, DEFAULT_SCHEME, SCHEME_NAMES, make_scheme
@@ -142,7 +143,7 @@ class Transcription:
     """The compiled NLP of (problem, discretisation); solve it for any parameters p."""
 
     def __init__(self, problem: Problem, disc: Discretization,
-                 ipopt: dict[str, Any] | None = None) -> None:
+                 ipopt: dict[str, Any] | None = None, jit: bool = False) -> None:
         t0 = time.perf_counter()
         if problem.cost is None:
             raise ConfigError(f"problem {problem.name!r} has no cost; call minimize()")
@@ -169,6 +170,14 @@ class Transcription:
         #: the name of the IPOPT Function (and of its exported C code): safe for CasADi
         self.function_name = f"{casadi_name(problem.name)}_N{self.N}"
         self._options = nlpsol_options(ipopt, fns)
+        #: compiled evaluation (:mod:`~ocgroupoid.nlp.jit`): whether on, and whether this
+        #: build compiled its library (False: loaded from the cache)
+        self.jit, self.jit_compiled = jit, False
+        if jit:
+            fns["nlp_f"] = ca.Function("nlp_f", [x, p], [fns["f"]], ["x", "p"], ["f"])
+            fns["nlp_g"] = ca.Function("nlp_g", [x, p], [fns["g"]], ["x", "p"], ["g"])
+            self._options["cache"], self.jit_compiled = compiled(fns)
+        t_jit = time.perf_counter()
         self._watch: Watch | None = None
         try:
             self.solver = ca.nlpsol(self.function_name, "ipopt", self.nlp, self._options)
@@ -180,22 +189,25 @@ class Transcription:
         self.bounds_function = self._bounds_function()
         self.build_seconds = time.perf_counter() - t0
         #: where the build time went: stage graphs and layout, derivative assembly, IPOPT setup
-        self.build_phases = {"stages": t1 - t0, "assembly": t2 - t1, "nlpsol": t3 - t2}
+        self.build_phases = {"stages": t1 - t0, "assembly": t2 - t1, "jit": t_jit - t2,
+                             "nlpsol": t3 - t_jit}
 
     def _final_blocks(self) -> list[Block]:
         pb, G, N, lay, sch = self.problem, self.problem.groupoid, self.N, self.layout, self.scheme
-        ds, dg, nt = G.state_size, G.algebra_dim, G.target_size
+        dg, nt = G.algebra_dim, G.target_size
         npar = pb.P.numel()
         out = []
+        zN, stored = sch.final_state()
+        nz = len(zN)
         if pb.terminal is not None:
             y = pb.y if pb.end_velocities else ca.SX.zeros(dg)
             phi = ca.substitute(pb.terminal, ca.vertcat(pb.y, pb.s, pb.q),
                                 ca.vertcat(y, pb.s, G.base(pb.s)))
             terminal = ca.Function("terminal", [pb.s, pb.y, pb.P], [phi])
             out.append(Block("terminal", stage_function(
-                "terminal", [ds, dg, npar], lambda s, v, par: (terminal(s, v, par),
+                "terminal", [nz, dg, npar], lambda z, v, par: (terminal(stored(z), v, par),
                                                                ca.SX(0, 1))),
-                columns(sch.states[:, N], sch.end_velocity, lay.P, ncols=1), npar, Kind.COST))
+                columns(zN, sch.end_velocity, lay.P, ncols=1), npar, Kind.COST))
         if lay.phases:
             lo, hi = STEP_RANGE
             n = ca.DM(lay.phases)
@@ -221,16 +233,16 @@ class Transcription:
                       for f, m in zip(G.factors, self.masks.end_state)
                       for j in np.flatnonzero(m)]
             out.append(Block("final", stage_function(
-                "final", [ds, nt], lambda s, tg: (ca.SX(1, 1), chart(s, tg)[keep])),
-                columns(sch.states[:, N], lay.end, ncols=1), nt, Kind.FINAL, labels, [""]))
+                "final", [nz, nt], lambda z, tg: (ca.SX(1, 1), chart(stored(z), tg)[keep])),
+                columns(zN, lay.end, ncols=1), nt, Kind.FINAL, labels, [""]))
         if self.problem.final_conditions:
             ends = sch.stages.final_conditions
             labels = [f"final condition {n!r}" for n, c in self.problem.final_conditions
                       for _ in range(c.numel())]
             out.append(Block("final_conditions", stage_function(
-                "final_conditions", [ds, dg, npar],
-                lambda s, v, par: (ca.SX(1, 1), ends(s, v, par))),
-                columns(sch.states[:, N], sch.end_velocity, lay.P, ncols=1), npar,
+                "final_conditions", [nz, dg, npar],
+                lambda z, v, par: (ca.SX(1, 1), ends(stored(z), v, par))),
+                columns(zN, sch.end_velocity, lay.P, ncols=1), npar,
                 Kind.FINAL_CONDITION, labels, [""]))
         return out
 
@@ -389,8 +401,7 @@ class Transcription:
         w = ca.vertcat(x, p)
         pick = lambda idx: self.layout.gather(w, idx)  # noqa: E731
         r = self.scheme.readout(pick)
-        x_rec = self.layout.compose([(np.arange(self.nx), x), (self.scheme.states[:, 1:],
-                                                               r.states[:, 1:])])
+        x_rec = self.layout.compose([(np.arange(self.nx), x), *self.scheme.reconstructed(r)])
         T = pick(self.layout.T)
         steps = pick(self.layout.steps[None, :]) / self.N  # 1 x N step sizes
         nodes = ca.vertcat(0, ca.cumsum(steps.T))  # node times, a column

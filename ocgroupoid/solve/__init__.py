@@ -5,7 +5,8 @@ from .guesses import geodesic_guesses, interpolate, perturbed_guesses
 from .readout import make_solution
 from .solution import Solution, write_atomic
 from .solver import Minimum, Solver, compile, distinct_minima, solve
+from .auto import Level, solve_to_accuracy
 
 __all__ = ["Solver", "compile", "solve", "Solution", "Minimum", "distinct_minima",
            "make_solution", "geodesic_guesses", "perturbed_guesses", "interpolate",
-           "write_atomic"]
+           "write_atomic", "solve_to_accuracy", "Level"]

@@ -79,6 +79,8 @@ def step_sizes(tr: Transcription, steps: np.ndarray) -> dict[str, float]:
     SE(n)) of every velocity whose retraction has a singular step (Cayley at pi, the
     first-order rule at pi/2): how close a grid comes to it."""
     G = tr.problem.groupoid
+    if not tr.scheme.variational:  # a baseline steps by RK4, not by a retraction
+        return {}
     return {f.velocity: float(np.max(ret.step_norm(steps[:, vs])))
             for f, ret, vs in zip(G.factors, tr.scheme.retractions, G.velocity_layout.slices)
             if np.isfinite(ret.step_limit)}
@@ -113,12 +115,15 @@ def diagnose(tr: Transcription, x: np.ndarray, p: np.ndarray, lam_g: np.ndarray,
     The replay runs for solved points only: the controls of a failed solve can be huge or
     NaN, and integrating them can take hours."""
     g = np.array(tr.g_fun(x, p)).ravel()
-    r = euler_lagrange_residual(tr, x, p, lam_g)
     path = tr.rows(Kind.PATH).ravel()
     s = out["node_states"]
-    d: dict[str, Any] = {
-        "euler_lagrange_residual_max": float(np.max(np.abs(r))) if r.size else 0.0,
-        "euler_lagrange_residual_per_node": np.max(np.abs(r), axis=1).tolist() if r.size else [],
+    d: dict[str, Any] = {}
+    if tr.scheme.variational:  # a baseline has no discrete Euler-Lagrange equations
+        r = euler_lagrange_residual(tr, x, p, lam_g)
+        d["euler_lagrange_residual_max"] = float(np.max(np.abs(r))) if r.size else 0.0
+        d["euler_lagrange_residual_per_node"] = np.max(np.abs(r), axis=1).tolist() \
+            if r.size else []
+    d |= {
         "manifold_distance": manifold_distance(tr, s),
         "final_residual": terminal_errors(tr, s[-1], None, p),
         "reconstruction_residual_max": float(np.max(np.abs(

@@ -41,15 +41,17 @@ def hint_for(tr: Transcription, r: RawResult, steps: np.ndarray) -> str:
     """The hint for a failed result; ``steps`` are its algebra increments (N x dim y)."""
     if r.success:
         return ""
-    parts = [HINTS.get(r.status, "try multistart or continuation")]
+    troubles = tr.scheme.troubles(np.concatenate([r.x, r.p]), failed=True)
+    parts = [HINTS.get(r.status, "try multistart or continuation"), *troubles]
     if r.status in UNMET:
-        parts += [f"unreachable as posed: {d}, or prescribe the value the motion implies"
-                  for d in dependent_conditions(tr, r.x, r.p)]
+        if not troubles:  # a coordinate singularity also makes rows dependent: not the cause
+            parts += [f"unreachable as posed: {d}, or prescribe the value the motion implies"
+                      for d in dependent_conditions(tr, r.x, r.p)]
         parts.append(worst_violation(tr, r))
     G = tr.problem.groupoid
     for f, ret, vs in zip(G.factors, tr.scheme.retractions, G.velocity_layout.slices):
         step = float(np.max(ret.step_norm(steps[:, vs])))
-        if step > 0.5 * ret.step_limit:
+        if tr.scheme.variational and step > 0.5 * ret.step_limit:  # baselines: no retraction
             parts.append(f"{f.velocity} turns {step:.3g} rad in one step ({ret.name} "
                          f"is singular at {ret.step_limit:.2f}); increase N")
     return "; ".join(parts)

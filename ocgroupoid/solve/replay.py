@@ -20,6 +20,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from ..nlp.dynamics import Dynamics
 from ..nlp.transcription import Transcription
 
 #: RK4 substeps per piece: the first pair compared, and the most ever taken
@@ -53,58 +54,12 @@ class Replay:
     """Continuous dynamics of a problem, driven by sampled controls (module docstring)."""
 
     def __init__(self, tr: Transcription) -> None:
-        pb, G = tr.problem, tr.problem.groupoid
         self.tr = tr
-        s, y, u = ca.SX.sym("s", G.state_size), ca.SX.sym("y", G.algebra_dim), \
-            ca.SX.sym("u", len(pb.controls))
-        q = G.base(s)
-        sdot = G.state_rate(s, y)
-        self.reason = ""
+        dynamics = Dynamics(tr.problem, tr.scheme.stages)
         #: ``rhs(z, u, P) -> dz/dt``, z the node state (and the velocity, second order)
-        self.rhs: ca.Function | None = None
+        self.rhs: ca.Function | None = dynamics.rhs
+        self.reason = dynamics.reason
         self._cache: dict[tuple[int, ...], ca.Function] = {}
-        ctrl = tr.scheme.stages.controls
-        if pb.order == 2 and pb.dynamics is not None:
-            mech = pb.dynamics
-            EL = ca.substitute(ca.substitute(mech.EL, pb.q, q), pb.y, y)
-            M = ca.jacobian(EL, pb.dy)
-            c = ca.substitute(EL, pb.dy, ca.DM.zeros(G.algebra_dim))
-            F = ca.SX.zeros(G.algebra_dim)
-            F[list(mech.actuated)] = ca.mtimes(ca.substitute(mech.input_matrix, pb.q, q), u)
-            self.rhs = ca.Function("rhs", [ca.vertcat(s, y), u, pb.P],
-                                   [ca.vertcat(sdot, ca.solve(M, F - c))])
-        elif pb.order == 2 and ca.depends_on(ctrl, pb.dy) and ca.is_equal(ctrl, pb.dy, 2):
-            self.rhs = ca.Function("rhs", [ca.vertcat(s, y), u, pb.P], [ca.vertcat(sdot, u)])
-        elif pb.order == 1:
-            self._first_order(s, q, y, u, sdot, ctrl)
-        else:
-            self.reason = "no dynamics: the controls are neither mechanics nor accelerations"
-
-    def _first_order(self, s: ca.SX, q: ca.SX, y: ca.SX, u: ca.SX, sdot: ca.SX,
-                     ctrl: ca.SX) -> None:
-        pb = self.tr.problem
-        ctrl_idx = []
-        for k in range(ctrl.numel()):
-            hits = [i for i in range(pb.y.numel()) if ca.is_equal(ctrl[k], pb.y[i])]
-            if not hits:
-                self.reason = "first-order controls must be velocity components"
-                return
-            ctrl_idx.append(hits[0])
-        dep = [i for i in range(pb.y.numel()) if i not in ctrl_idx]
-        psi = self.tr.scheme.stages.constraints
-        if psi.numel() != len(dep):
-            self.reason = (f"{len(dep)} velocities are not controls but {psi.numel()} "
-                           "constraints determine them")
-            return
-        yfull = ca.SX.zeros(pb.y.numel())
-        yfull[ctrl_idx] = u
-        ydep = ca.SX.sym("ydep", len(dep))
-        yfull[dep] = ydep
-        res = ca.substitute(ca.substitute(psi, pb.q, q), pb.y, yfull)
-        J = ca.jacobian(res, ydep)
-        r0 = ca.substitute(res, ydep, ca.DM.zeros(len(dep)))
-        ysol = ca.substitute(yfull, ydep, -ca.solve(J, r0))  # exact for affine psi
-        self.rhs = ca.Function("rhs", [s, u, pb.P], [ca.substitute(sdot, y, ysol)])
 
     def run(self, out: dict[str, np.ndarray], ppoly: dict[str, np.ndarray], p: np.ndarray
             ) -> dict[str, Any]:

@@ -88,6 +88,14 @@ class Solution:
         return (f"Solution({self.problem!r}, status={self.status!r}, cost={self.cost:.10g}, "
                 f"N={self.N}, T={self.T:g}, iterations={self.iterations})")
 
+    @property
+    def error_estimate(self) -> float | None:
+        """The estimated relative error of the cost (Richardson, from a coarser grid of the
+        same solve: ``horizon.N: auto`` or ``continuation``; details in
+        ``diagnostics["error_estimate"]``), or None when no coarser grid was solved."""
+        est = self.diagnostics.get("error_estimate")
+        return None if est is None else est.get("cost_relative")
+
     def control(self, t: Any) -> np.ndarray:
         """The control the scheme implies at the times t (rows), from its piecewise
         polynomial (``scipy.interpolate.PPoly``)."""

@@ -20,7 +20,7 @@ from ..model.problem import Problem
 from ..nlp.schemes import DEFAULT_RULE, DEFAULT_SCHEME
 from ..nlp.transcription import Discretization, Guess, RawResult, Transcription
 from ..nlp.watch import Listener
-from . import mesh
+from . import mesh, richardson
 from .guesses import geodesic_guesses, interpolate, model_guesses, perturbed_guesses
 from .interrupt import Interrupt, interruptible
 from .readout import make_solution
@@ -92,11 +92,13 @@ class Solver:
 
     def __init__(self, problem: Problem, N: int, retraction: str = "cayley",
                  rule: str = DEFAULT_RULE, ipopt: dict[str, Any] | None = None,
-                 scheme: str = DEFAULT_SCHEME, steps: str = "uniform") -> None:
+                 scheme: str = DEFAULT_SCHEME, steps: str = "uniform", jit: bool = False
+                 ) -> None:
         self.problem = problem
         self.ipopt = dict(ipopt or {})
+        self.jit = jit
         self.disc = Discretization(N, retraction, rule, scheme, steps)
-        self.transcription = Transcription(problem, self.disc, self.ipopt)
+        self.transcription = Transcription(problem, self.disc, self.ipopt, jit)
         self._coarse: dict[int, Transcription] = {}
         self._phased: dict[tuple[int, ...], Transcription] = {}
 
@@ -105,7 +107,7 @@ class Solver:
             return self.transcription
         if N not in self._coarse:
             disc = replace(self.disc, N=N)
-            self._coarse[N] = Transcription(self.problem, disc, self.ipopt)
+            self._coarse[N] = Transcription(self.problem, disc, self.ipopt, self.jit)
         return self._coarse[N]
 
     def guesses(self, tr: Transcription, p: np.ndarray, multistart: bool | int) -> list[Guess]:
@@ -130,10 +132,11 @@ class Solver:
         a further start gets :data:`START_BUDGET` iterations; the default of problem files
         and the CLI), False (the first geodesic only; the default here, which the exported
         C solver shares) or the number of perturbed starts. ``continuation``: coarser N
-        solved first, in order. ``replay``: drive the controls through the continuous
-        dynamics (a few ms; it decides whether the plan lands, ``replay_tolerance``).
-        ``progress`` hears each start and, every 0.25 s, IPOPT's iteration. Ctrl-C stops the
-        solve with the best point so far, ``status: interrupted``.
+        solved first, in order; the last of them gives the Solution a Richardson estimate of
+        its cost error (:attr:`Solution.error_estimate`). ``replay``: drive the controls
+        through the continuous dynamics (a few ms; it decides whether the plan lands,
+        ``replay_tolerance``). ``progress`` hears each start and, every 0.25 s, IPOPT's
+        iteration. Ctrl-C stops the solve with the best point so far, ``status: interrupted``.
         """
         levels = sorted(set(int(n) for n in (continuation or [])))
         if any(n >= self.disc.N for n in levels):
@@ -141,6 +144,7 @@ class Solver:
         results: list[RawResult] = []
         seeds: list[Guess] | None = [guess] if guess is not None else None
         prev: tuple[Transcription, RawResult] | None = None
+        coarse = prev  # the grid solved before the last one (continuation)
         with interruptible() as interrupt:
             for n in [*levels, self.disc.N]:
                 tr = self._at(n)
@@ -162,7 +166,7 @@ class Solver:
                 if prev is None:
                     results = level
                 best = min(level, key=lambda r: (not r.success, r.cost))
-                prev = (tr, best)
+                coarse, prev = prev, (tr, best)
                 if interrupt.requested:
                     break
             assert prev is not None
@@ -174,6 +178,11 @@ class Solver:
         progress("diagnostics")
         solution = make_solution(tr, best, distinct_minima(results), replay, self.ipopt,
                                  replay_tolerance)
+        if coarse is not None and coarse[1].success and best.success and \
+                tr is self.transcription:  # Richardson from the last continuation grid
+            p = tr.scheme.accuracy
+            solution.diagnostics["error_estimate"] = richardson.estimate(
+                best.cost, coarse[1].cost, tr.N, coarse[0].N, p, p)
         return replace(solution, starts=len(results),
                        ipopt_seconds_total=sum(r.solve_seconds for r in results))
 
@@ -189,7 +198,7 @@ class Solver:
         progress(f"adaptive steps: phases of {', '.join(map(str, phases))} intervals")
         if phases not in self._phased:
             self._phased[phases] = Transcription(self.problem, replace(self.disc, phases=phases),
-                                                 self.ipopt)
+                                                 self.ipopt, self.jit)
         phased = self._phased[phases]
         p = phased.pack(params, initial, final, tr.horizon(r.x, r.p))
         result = phased.solve(interpolate(tr, r.x, r.p, self.disc.N), p)
@@ -198,14 +207,15 @@ class Solver:
 
 def compile(problem: Problem, N: int = 64, retraction: str = "cayley", rule: str = DEFAULT_RULE,
             ipopt: dict[str, Any] | None = None, scheme: str = DEFAULT_SCHEME,
-            steps: str = "uniform") -> Solver:
+            steps: str = "uniform", jit: bool = False) -> Solver:
     """Build the NLP of ``problem`` on N intervals once; see :class:`Solver`. ``steps``:
-    ``uniform`` (h = T/N) or ``adaptive`` (one step per interval, summing to T)."""
-    return Solver(problem, N, retraction, rule, ipopt, scheme, steps)
+    ``uniform`` (h = T/N) or ``adaptive`` (one step per interval, summing to T); ``jit``:
+    evaluate the NLP's Functions as compiled C (:mod:`~ocgroupoid.nlp.jit`)."""
+    return Solver(problem, N, retraction, rule, ipopt, scheme, steps, jit)
 
 
 def solve(problem: Problem, N: int = 64, retraction: str = "cayley", rule: str = DEFAULT_RULE,
           ipopt: dict[str, Any] | None = None, scheme: str = DEFAULT_SCHEME,
-          steps: str = "uniform", **kwargs: Any) -> Solution:
+          steps: str = "uniform", jit: bool = False, **kwargs: Any) -> Solution:
     """Build and solve in one call; ``kwargs`` go to :meth:`Solver.solve`."""
-    return compile(problem, N, retraction, rule, ipopt, scheme, steps).solve(**kwargs)
+    return compile(problem, N, retraction, rule, ipopt, scheme, steps, jit).solve(**kwargs)

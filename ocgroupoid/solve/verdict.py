@@ -91,7 +91,8 @@ def verdict(tr: Transcription, r: RawResult, out: dict[str, np.ndarray],
             if value > tol:
                 failures.append(f"{name} {what} {value:.2g} (more than {tol:.0e})")
     failures += dependent_conditions(tr, r.x, r.p)
-    order = 4 if tr.disc.scheme == "order4" else 2
+    failures += tr.scheme.troubles(np.concatenate([r.x, r.p]))
+    order = tr.scheme.accuracy
     rep = d.get("replay", {})
     if rep.get("available"):
         scale = scales(tr, out, r.p)
@@ -101,7 +102,7 @@ def verdict(tr: Transcription, r: RawResult, out: dict[str, np.ndarray],
             failures.append(
                 f"the plan does not land: the controls replayed through the continuous "
                 f"dynamics miss final.{worst[1]} by {worst[2]:.2g} "
-                f"({worst[2] / max(scale[worst[1]], FLOOR):.0%} of the distance it covers, "
+                f"({worst[2] / max(scale[worst[1]], FLOOR):.1%} of the distance it covers, "
                 f"tolerance {replay_tolerance:.0%}): the grid is too "
                 f"coarse for this motion; increase N to {suggested_N(tr.N, worst[0], order)}")
     else:

@@ -50,10 +50,14 @@ def classify(source: Source, pts: Sequence[Point]
              ) -> tuple[list[tuple[str, Point]], list[tuple[Point, str]]]:
     """Validate every point: (structure key, point) of the valid ones, (point, message) of
     the others (a value the problem file rejects, e.g. a negative T)."""
+    from ..files import fixed_grid
+
     valid, invalid = [], []
     for p in pts:
         try:
-            valid.append((structure_key(source.load(p.overrides)), p))
+            cfg = source.load(p.overrides)
+            fixed_grid(cfg, "a sweep")  # one compiled NLP per structure
+            valid.append((structure_key(cfg), p))
         except OcgError as err:
             invalid.append((p, str(err)))
     return valid, invalid

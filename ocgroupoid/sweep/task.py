@@ -92,7 +92,8 @@ def solver_for(structure: str, pb: Problem, cfg: Config, args: dict[str, Any]
         return solver, False
     f = cfg.file
     # the discretization section's keys (scheme, retraction, rule, ...) are compile()'s
-    solver = compile(pb, f.horizon.N, ipopt=f.solver.ipopt, **f.discretization.model_dump())
+    solver = compile(pb, f.horizon.N, ipopt=f.solver.ipopt, jit=f.solver.jit,
+                     **f.discretization.model_dump())
     _solvers[structure] = solver
     _solvers.move_to_end(structure)
     while len(_solvers) > CACHE_SIZE:

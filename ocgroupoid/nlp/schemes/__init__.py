@@ -7,12 +7,18 @@ from ...model.problem import Problem
 from .base import Readout, Scheme
 from .order2 import DEFAULT_RULE, IntervalMidpoint, Node, NodeMidpoint
 from .order4 import GaussStages, QuadraticGauss
+from .shooting import RK4Euler, RK4Matrix, RK4Quaternion
 
 #: scheme name -> problem order (1 or 2) -> class
 SCHEMES: dict[str, dict[int, type[Scheme]]] = {
     "order2": {2: NodeMidpoint, 1: IntervalMidpoint},
     "order4": {2: QuadraticGauss, 1: GaussStages},
+    "rk4_quat": {2: RK4Quaternion, 1: RK4Quaternion},
+    "rk4_matrix": {2: RK4Matrix, 1: RK4Matrix},
+    "rk4_euler": {2: RK4Euler, 1: RK4Euler},
 }
+#: the baselines: RK4 shooting as a rockit/Opti user writes it, there to be measured against
+BASELINES = ("rk4_quat", "rk4_matrix", "rk4_euler")
 SCHEME_NAMES = tuple(SCHEMES)
 DEFAULT_SCHEME = "order2"
 
@@ -28,5 +34,5 @@ def make_scheme(name: str, problem: Problem, N: int, retraction: str, rule: str)
 
 
 __all__ = ["Scheme", "Readout", "Node", "NodeMidpoint", "IntervalMidpoint", "QuadraticGauss",
-           "GaussStages", "SCHEMES",
+           "GaussStages", "SCHEMES", "BASELINES",
            "SCHEME_NAMES", "DEFAULT_SCHEME", "DEFAULT_RULE", "make_scheme"]

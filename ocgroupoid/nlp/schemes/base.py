@@ -71,6 +71,7 @@ class Scheme(ABC):
     name: ClassVar[str]
     accuracy: ClassVar[int]  # the order at which costs and trajectories converge
     adaptive_steps: ClassVar[bool] = False  # whether its stages read per-interval steps
+    variational: ClassVar[bool] = True  # whether it has discrete Euler-Lagrange equations
     problem_order: ClassVar[int]  # 2: second-order problems (Ltilde); 1: first-order (l)
     summary: ClassVar[str]
 
@@ -130,6 +131,24 @@ class Scheme(ABC):
         grad = np.array(ca.Function("reduced", [xs], [ca.gradient(val, xs)])(x)).ravel()
         g = np.concatenate([grad, np.zeros(p.size)])
         return g[self.velocity_groups]
+
+    def final_state(self) -> tuple[np.ndarray, ca.Function]:
+        """The w-indices the final conditions read, and the map from them to the stored
+        final state (the identity, unless the scheme carries states in its own
+        coordinates)."""
+        s = ca.SX.sym("s", self.problem.groupoid.state_size)
+        return self.states[:, self.N], ca.Function("stored", [s], [s])
+
+    def reconstructed(self, r: Readout) -> list[tuple[np.ndarray, ca.MX]]:
+        """Pairs (w-indices, graphs) that put the exactly reconstructed node states of the
+        read-out ``r`` into a point (the reduced action of the Euler-Lagrange check)."""
+        return [(self.states[:, 1:], r.states[:, 1:])]
+
+    def troubles(self, w: np.ndarray, failed: bool = False) -> list[str]:
+        """What this scheme knows went wrong at the point w = [x; p] (a baseline's
+        coordinate singularity, ...), ``failed``: IPOPT did not solve; sentences for the
+        hint, none by default."""
+        return []
 
     @abstractmethod
     def unpack(self, w: np.ndarray) -> dict[str, np.ndarray]:

@@ -1,0 +1,13 @@
+"""Benchmarks of the schemes against RK4 shooting baselines (``ocgroupoid bench``).
+
+:func:`~ocgroupoid.bench.workprecision.work_precision` times every method on a geometric
+range of N against a reference cost (:mod:`~ocgroupoid.bench.reference`) and the replay's
+landing error, and draws the work-precision chart (:mod:`~ocgroupoid.bench.chart`);
+:func:`~ocgroupoid.bench.stability.stability` maps where each method fails over slew angles
+and grids (:mod:`~ocgroupoid.bench.outcome`, :mod:`~ocgroupoid.bench.stability_chart`). Both
+write a JSON line per solve as they go (:mod:`~ocgroupoid.bench.record`), then a summary JSON
+and a PNG.
+
+Nothing is imported here: the command line (:mod:`~ocgroupoid.bench.commands`) registers
+the ``bench`` group without loading the solvers, SciPy or matplotlib.
+"""

@@ -1,0 +1,163 @@
+"""``ocgroupoid bench``: the work-precision chart and the stability map of a problem file.
+
+Registered on the main command line (``ocgroupoid.cli``) as the ``bench`` group; heavy
+imports happen inside the commands. Exit codes as ``solve``: 0 done, 1 a reference did not
+solve, 2 bad input (one line, no traceback), 130 interrupted (the finished rows are kept).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Optional
+
+import typer
+from rich.console import Console
+
+bench = typer.Typer(no_args_is_help=True, add_completion=False,
+                    help="Benchmarks: our schemes against RK4 shooting baselines.")
+out = Console()
+err = Console(stderr=True, soft_wrap=True)
+
+SET_HELP = "Override any key of the file: KEY=VALUE, the value read as YAML."
+OUT_HELP = ("results folder: rows and summary in OUT/{what}/NAME.jsonl|json, the chart in "
+            "OUT/figures/{what}_NAME.png")
+
+
+def _fail(message: str, code: int = 2) -> None:
+    """One line on stderr (plain text, not rich markup) and the exit code."""
+    from rich.markup import escape
+
+    err.print(f"[bold red]error:[/] {escape(message)}", highlight=False, markup=True)
+    raise typer.Exit(code)
+
+
+def _interrupted(rows: Path) -> None:
+    _fail(f"interrupted; the finished rows are kept in {rows}", 130)
+
+
+@bench.command("work-precision")
+def work_precision_command(
+    file: Path = typer.Argument(..., help="problem file (YAML)"),
+    out_dir: Path = typer.Option(Path("results"), "--out",
+                                 help=OUT_HELP.format(what="work_precision")),
+    schemes: Optional[str] = typer.Option(None, "--schemes", help="comma-separated "
+                                          "SCHEME[:RETRACTION] (default order2, order4, "
+                                          "order2:exp, rk4_quat, rk4_matrix, rk4_euler)"),
+    grids: Optional[str] = typer.Option(None, "--N", help="comma-separated N (default "
+                                        "8,16,32,64,128)"),
+    repeats: int = typer.Option(3, "--repeats", help="timed IPOPT runs per N (at least; "
+                                "fast solves are repeated more, the median is kept)"),
+    reference_N: int = typer.Option(256, "--reference-N", help="finest grid of the "
+                                    "reference (a power of two >= 16)"),
+    name: Optional[str] = typer.Option(None, "--name", help="name of the outputs (default "
+                                       "the file's stem)"),
+    set_: list[str] = typer.Option([], "--set", help=SET_HELP),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="print only errors"),
+) -> None:
+    """IPOPT time against cost and landing accuracy, every method on every N.
+
+    Median IPOPT time, iterations, relative cost error against a reference and replay
+    terminal error for every method and N: a JSONL row per solve as it goes, a summary JSON
+    (with the time ratios at equal accuracy) and a log-log work-precision chart."""
+    from ..errors import ConfigError, OcgError, SolverError
+    from ..solve.outputs import check_folder
+    from .methods import WORK_PRECISION, parse_grids, parse_methods
+    from .progress import progress_bar
+    from .workprecision import DEFAULT_NS, outputs, work_precision
+
+    where = None
+    try:
+        check_folder(out_dir, "--out")
+        methods = parse_methods(schemes, WORK_PRECISION)
+        Ns = parse_grids(grids, DEFAULT_NS)
+        if repeats < 1:
+            raise ConfigError(f"--repeats must be at least 1, got {repeats}")
+        where = outputs(out_dir, name or file.stem)
+        with progress_bar(err, quiet) as bar:
+            summary, where = work_precision(file, set_, out_dir, methods, Ns, repeats,
+                                            reference_N, name, bar)
+    except SolverError as e:
+        _fail(str(e), 1)
+        return
+    except OcgError as e:
+        _fail(str(e))
+        return
+    except KeyboardInterrupt:
+        _interrupted(where.rows if where else out_dir)
+        return
+    if not quiet:
+        out.print(_ratios(summary))
+        out.print(f"rows {where.rows}, summary {where.summary}, chart {where.chart}")
+
+
+def _ratios(summary: dict) -> str:
+    """One line per error kind: rk4_quat's time over our fastest, at each common level."""
+    lines = [f"{summary['problem']}: reference J = {summary['reference']['cost']:.12g} "
+             f"(relative uncertainty {summary['reference']['relative_uncertainty']:.1e})"]
+    for key, rows in summary["equal_accuracy"].items():
+        lines.append(f"  time of rk4_quat / ours at equal {key.replace('_', ' ')}: " + (
+            ", ".join(f"{r['level']:.0e}: {'>=' if r['lower_bound'] else ''}{r['ratio']:.2g}x "
+                      f"({r['ours']})" for r in rows) or "no common error level"))
+    return "\n".join(lines)
+
+
+@bench.command("stability")
+def stability_command(
+    file: Path = typer.Argument(..., help="problem file (YAML) with an SO(3) state"),
+    out_dir: Path = typer.Option(Path("results"), "--out",
+                                 help=OUT_HELP.format(what="stability")),
+    schemes: Optional[str] = typer.Option(None, "--schemes", help="comma-separated "
+                                          "SCHEME[:RETRACTION] (default order2, order4, "
+                                          "order2:exp, order2:first_order and the three "
+                                          "baselines)"),
+    grids: Optional[str] = typer.Option(None, "--N", help="comma-separated N (default "
+                                        "2,4,8,16,32,64)"),
+    angles: Optional[str] = typer.Option(None, "--angles", help="comma-separated slew "
+                                         "angles in rad (default 0.5,1,1.5,2,2.6,3,3.5)"),
+    axis: str = typer.Option("0,1,0", "--axis", help="axis of the slews (body y: the pitch)"),
+    state: str = typer.Option("R", "--state", help="the SO(3) state slewed (final.STATE)"),
+    multistart: bool = typer.Option(False, "--multistart", help="solve with the file's "
+                                    "multi-start (default: from the first geodesic guess)"),
+    name: Optional[str] = typer.Option(None, "--name", help="name of the outputs (default "
+                                       "the file's stem)"),
+    set_: list[str] = typer.Option([], "--set", help=SET_HELP),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="print only errors"),
+) -> None:
+    """Where each method fails, over slew angles and grids: a map.
+
+    Slews of every angle on every N, each cell converged, unverified, off group, off target,
+    other minimum or failed, with the message a user gets; a JSONL row per solve as it goes,
+    a summary JSON and a map (PNG)."""
+    from ..errors import OcgError, SolverError
+    from ..solve.outputs import check_folder
+    from .methods import STABILITY, parse_floats, parse_grids, parse_methods
+    from .progress import progress_bar
+    from .stability import DEFAULT_ANGLES, DEFAULT_NS, outputs, stability
+
+    where = None
+    try:
+        check_folder(out_dir, "--out")
+        methods = parse_methods(schemes, STABILITY)
+        Ns = parse_grids(grids, DEFAULT_NS)
+        slews = parse_floats(angles, DEFAULT_ANGLES, "--angles")
+        direction = tuple(parse_floats(axis, (), "--axis"))
+        where = outputs(out_dir, name or file.stem)
+        with progress_bar(err, quiet) as bar:
+            summary, where = stability(file, set_, out_dir, methods, Ns, slews, direction,
+                                       state, multistart, name, bar)
+    except SolverError as e:
+        _fail(str(e), 1)
+        return
+    except OcgError as e:
+        _fail(str(e))
+        return
+    except KeyboardInterrupt:
+        _interrupted(where.rows if where else out_dir)
+        return
+    if not quiet:
+        counts: dict[str, int] = {}
+        for c in summary["cells"]:
+            counts[c["outcome"]] = counts.get(c["outcome"], 0) + 1
+        out.print(f"{len(summary['cells'])} solves: " + ", ".join(
+            f"{n} {o}" for o, n in counts.items()))
+        out.print(f"rows {where.rows}, summary {where.summary}, map {where.chart}")

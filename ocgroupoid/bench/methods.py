@@ -1,0 +1,117 @@
+"""What a benchmark compares: a scheme with a retraction (``order2:exp``), and the grids.
+
+A method is written ``SCHEME`` or ``SCHEME:RETRACTION`` (``order2``, ``order4:exp``,
+``rk4_quat``); the retraction defaults to cayley and is ignored by the RK4 baselines, which
+integrate the continuous dynamics in their own coordinates.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ..errors import ConfigError
+from ..lie.retraction import RETRACTION_NAMES
+from ..lie.rn import Rn
+from ..model.problem import Problem
+from ..nlp.schemes import BASELINES, DEFAULT_RULE, SCHEME_NAMES
+from ..nlp.schemes.coordinates import coordinates
+
+
+@dataclass(frozen=True)
+class Method:
+    """A scheme and the retraction of its group factors."""
+
+    scheme: str
+    retraction: str = "cayley"
+
+    @property
+    def baseline(self) -> bool:
+        """Whether it is an RK4 shooting baseline (:data:`~ocgroupoid.nlp.schemes.BASELINES`)."""
+        return self.scheme in BASELINES
+
+    @property
+    def label(self) -> str:
+        """``order2`` (cayley), ``order2:exp``, ``rk4_quat``: how options and charts name it."""
+        return self.scheme if self.baseline or self.retraction == "cayley" else \
+            f"{self.scheme}:{self.retraction}"
+
+    def rule(self, file_rule: str) -> str:
+        """The problem file's rule applies to order2; every other scheme has only the
+        midpoint rule."""
+        return file_rule if self.scheme == "order2" else DEFAULT_RULE
+
+
+#: ours with cayley and exp, then the baselines
+WORK_PRECISION = (Method("order2"), Method("order4"), Method("order2", "exp"),
+                  Method("rk4_quat"), Method("rk4_matrix"), Method("rk4_euler"))
+#: the same and the first-order retraction (SO(3) problems only)
+STABILITY = (*WORK_PRECISION[:3], Method("order2", "first_order"), *WORK_PRECISION[3:])
+
+
+def parse_methods(text: str | None, default: tuple[Method, ...]) -> list[Method]:
+    """``"order2,order4:exp,rk4_quat"`` -> methods (``default`` when None); ConfigError naming
+    an unknown scheme or retraction."""
+    if text is None:
+        return list(default)
+    methods = []
+    for item in (s.strip() for s in text.split(",")):
+        scheme, _, retraction = item.partition(":")
+        if scheme not in SCHEME_NAMES:
+            raise ConfigError(f"--schemes: unknown scheme {scheme!r}; choose from "
+                              f"{', '.join(SCHEME_NAMES)} (a retraction after a colon: "
+                              "order2:exp)")
+        retraction = retraction or "cayley"
+        if retraction not in RETRACTION_NAMES:
+            raise ConfigError(f"--schemes: unknown retraction {retraction!r} in {item!r}; "
+                              f"choose from {', '.join(RETRACTION_NAMES)}")
+        methods.append(Method(scheme, retraction))
+    if len(set(methods)) != len(methods):
+        raise ConfigError(f"--schemes names a method twice: {text!r}")
+    return methods
+
+
+def parse_grids(text: str | None, default: tuple[int, ...], option: str = "--N") -> list[int]:
+    """``"8,16,32"`` -> sorted distinct N (``default`` when None); ConfigError for N < 2."""
+    if text is None:
+        return list(default)
+    try:
+        Ns = [int(s) for s in text.split(",")]
+    except ValueError:
+        raise ConfigError(f"{option}: {text!r} is not a comma-separated list of integers "
+                          "(e.g. 8,16,32)") from None
+    small = [N for N in Ns if N < 2]
+    if small:
+        raise ConfigError(f"{option}: N must be at least 2 (one interval has no interior "
+                          f"node), got {small[0]}")
+    return sorted(set(Ns))
+
+
+def parse_floats(text: str | None, default: tuple[float, ...], option: str) -> list[float]:
+    """``"0.5,1,2.6"`` -> floats (``default`` when None); ConfigError when not numbers."""
+    if text is None:
+        return list(default)
+    try:
+        return [float(s) for s in text.split(",")]
+    except ValueError:
+        raise ConfigError(f"{option}: {text!r} is not a comma-separated list of numbers") \
+            from None
+
+
+def redundant(methods: list[Method], problem: Problem) -> dict[str, str]:
+    """Methods that would repeat another one's computation on ``problem``, with the reason:
+    the matrix and Euler baselines equal rk4_quat without an SO(3) factor, and every
+    retraction equals cayley on R^n factors."""
+    factors = problem.groupoid.factors
+    own_coordinates = any(coordinates("matrix", f).name != "quaternion" for f in factors)
+    curved = any(not isinstance(f.group, Rn) for f in factors)
+    present = set(methods)
+    out = {}
+    for m in methods:
+        if m.baseline and m.scheme != "rk4_quat" and not own_coordinates and \
+                Method("rk4_quat") in present:
+            out[m.label] = "identical to rk4_quat here: no SO(3) factor to carry otherwise"
+        elif not m.baseline and m.retraction != "cayley" and not curved and \
+                Method(m.scheme) in present:
+            out[m.label] = f"identical to {m.scheme} here: every retraction is the " \
+                           "translation on R^n"
+    return out

@@ -1,0 +1,72 @@
+"""One timed solve: a method on N intervals, from the same cold start every repeat.
+
+The NLP is built once (not timed); IPOPT then runs ``repeats`` times from the same guess (a
+geodesic, or the multi-start guess labelled ``start`` that found the reference's minimum)
+without an iteration callback, more often when it is fast (until the runs add up to
+:data:`MIN_SECONDS`, at most :data:`MAX_REPEATS`), and the median of its wall times is the
+row's time. The last run is read out and diagnosed as :meth:`~ocgroupoid.solve.Solver.solve`
+does (replay, verdict, hint).
+"""
+
+from __future__ import annotations
+
+import statistics
+import time
+from dataclasses import dataclass
+from typing import Any
+
+from ..model.problem import Problem
+from ..nlp.transcription import Guess
+from ..solve import Solution, compile, distinct_minima, make_solution
+from .methods import Method
+
+MIN_SECONDS = 0.25  # a solve faster than this is repeated until the repeats add up to it,
+MAX_REPEATS = 15  # at most this often: medians of milliseconds are noisy
+
+
+@dataclass(frozen=True)
+class Setting:
+    """What a problem file fixes of every solve: IPOPT's options, order2's rule, the steps."""
+
+    ipopt: dict[str, Any]
+    rule: str
+    steps: str = "uniform"
+
+
+@dataclass
+class Timed:
+    """A diagnosed solution and the IPOPT wall times of its repeats (seconds)."""
+
+    solution: Solution
+    seconds: list[float]
+    build_seconds: float
+    start: str
+
+    @property
+    def median(self) -> float:
+        return statistics.median(self.seconds)
+
+
+def cold_start(solver_guesses: list[Guess], start: str | None) -> Guess:
+    """The guess labelled ``start`` (the first geodesic when None or absent)."""
+    return next((g for g in solver_guesses if g.label == start), solver_guesses[0])
+
+
+def timed_solve(problem: Problem, method: Method, N: int, setting: Setting, repeats: int,
+                start: str | None = None) -> Timed:
+    """Build ``method`` on N intervals and solve it ``repeats`` times from one cold start
+    (module docstring); raises what building raises (ConfigError, SingularityError)."""
+    t0 = time.perf_counter()
+    solver = compile(problem, N, method.retraction, method.rule(setting.rule), setting.ipopt,
+                     method.scheme, setting.steps)
+    tr = solver.transcription
+    p = tr.pack()
+    guess = cold_start(solver.guesses(tr, p, start is not None), start)
+    build = time.perf_counter() - t0
+    runs = [tr.solve(guess, p)]
+    while len(runs) < max(1, repeats) or (sum(r.solve_seconds for r in runs) < MIN_SECONDS
+                                          and len(runs) < MAX_REPEATS):
+        runs.append(tr.solve(guess, p))
+    last = runs[-1]
+    sol = make_solution(tr, last, distinct_minima([last]), True, setting.ipopt)
+    return Timed(sol, [r.solve_seconds for r in runs], build, guess.label)

@@ -1,0 +1,88 @@
+"""Compiled evaluation (``solver.jit``): the NLP's Functions as machine code.
+
+IPOPT calls five Functions per iteration (f, g, the gradient of f, the Jacobian of g, the
+Hessian of the Lagrangian; :func:`~ocgroupoid.nlp.assembly.assemble`). By default CasADi's
+virtual machine evaluates them; with ``jit`` they are written as C by CasADi's code
+generator, compiled once by the system C compiler into a shared library, and loaded with
+``casadi.external``. The library is cached per structure: its file name is a hash of the C
+source, so a problem built again with the same N, scheme and boundary structure (another
+process, a sweep worker, a re-run) loads it without compiling. Values (parameters p,
+boundary values, T) are inputs and never enter the hash.
+
+Measured on so3 at N = 256 (order2): evaluations 11.4 ms -> 1.2 ms per solve, a solve
+26 ms -> 15 ms, against 0.8 s to generate and compile (``scripts/bench_backends.py`` states
+the break-even in solves for every problem file).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import shutil
+import subprocess
+import tempfile
+from pathlib import Path
+
+import casadi as ca
+
+from ..errors import ConfigError
+
+#: the Functions IPOPT evaluates, by the names nlpsol looks up in its cache
+NLP_FUNCTIONS = ("nlp_f", "nlp_g", "nlp_grad_f", "nlp_jac_g", "nlp_hess_l")
+CFLAGS = ("-O1", "-shared", "-fPIC")  # -O1: most of -O2's speed at a fraction of its time
+
+
+def cache_dir() -> Path:
+    """Where compiled libraries live: ``$OCGROUPOID_JIT_CACHE``, else
+    ``$XDG_CACHE_HOME/ocgroupoid/jit`` (``~/.cache/ocgroupoid/jit``)."""
+    own = os.environ.get("OCGROUPOID_JIT_CACHE")
+    if own:
+        return Path(own)
+    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(base) / "ocgroupoid" / "jit"
+
+
+def compiler() -> str:
+    """The C compiler (``$CC``, else cc, gcc or clang on PATH)."""
+    for name in (os.environ.get("CC"), "cc", "gcc", "clang"):
+        if name and shutil.which(name):
+            return name
+    raise ConfigError("solver.jit needs a C compiler (cc, gcc or clang on PATH, or $CC): "
+                      "install one, or set solver.jit: false")
+
+
+def compiled(functions: dict[str, ca.Function]) -> tuple[dict[str, ca.Function], bool]:
+    """The Functions loaded from a compiled library (built unless cached); and whether it
+    was compiled now (False: found in the cache)."""
+    gen = ca.CodeGenerator("ocg_jit.c", {"with_header": False})
+    for name in NLP_FUNCTIONS:
+        gen.add(functions[name])
+    with tempfile.TemporaryDirectory(prefix="ocg-jit-") as tmp:
+        gen.generate(tmp + os.sep)
+        source = Path(tmp, "ocg_jit.c").read_bytes()
+        digest = hashlib.sha256(source + " ".join(CFLAGS).encode()).hexdigest()[:24]
+        folder = cache_dir()
+        library = folder / f"ocg_jit_{digest}.so"
+        built = not library.exists()
+        if built:
+            _build(Path(tmp, "ocg_jit.c"), library)
+    return {name: ca.external(name, str(library)) for name in NLP_FUNCTIONS}, built
+
+
+def _build(source: Path, library: Path) -> None:
+    """Compile ``source`` into ``library`` (written under a temporary name, then renamed:
+    concurrent builders of the same structure never load a half-written file)."""
+    try:
+        library.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise ConfigError(f"solver.jit: cannot create the cache folder {library.parent} "
+                          f"({e.strerror or e}); set OCGROUPOID_JIT_CACHE to a writable "
+                          "folder") from None
+    partial = library.with_name(f".{library.name}.{os.getpid()}")
+    cmd = [compiler(), *CFLAGS, str(source), "-o", str(partial), "-lm"]
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    if r.returncode != 0:
+        partial.unlink(missing_ok=True)
+        raise ConfigError(f"solver.jit: the C compiler failed ({' '.join(cmd[:1])}): "
+                          f"{r.stderr.strip()[-400:]}; set solver.jit: false")
+    os.replace(partial, library)

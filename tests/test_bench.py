@@ -1,0 +1,143 @@
+"""``ocgroupoid bench`` (issue 16): work-precision rows, charts and stability maps, written as
+they go; bad input named; the gimbal lock of the Euler-angle baseline measured."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+import ocgroupoid as og
+from ocgroupoid import files
+from ocgroupoid.bench import workprecision
+from ocgroupoid.bench.equal_accuracy import compare, headline, time_at
+from ocgroupoid.bench.record import read_rows
+from ocgroupoid.bench.stability import manoeuvre
+from ocgroupoid.cli import app
+
+ROOT = Path(__file__).resolve().parent.parent
+SO3 = ROOT / "problems" / "so3_rest_to_rest.yaml"
+PNG = b"\x89PNG\r\n\x1a\n"
+runner = CliRunner()
+TINY = ["--schemes", "order4,rk4_quat", "--N", "8,16", "--repeats", "1", "--reference-N", "32"]
+
+
+def work_precision(out: Path, *extra: str) -> object:
+    return runner.invoke(app, ["bench", "work-precision", str(SO3), "--out", str(out), "-q",
+                               *TINY, *extra])
+
+
+def test_work_precision_writes_rows_summary_and_chart(tmp_path: Path) -> None:
+    r = work_precision(tmp_path)
+    assert r.exit_code == 0, r.output
+    rows = read_rows(tmp_path / "work_precision" / "so3_rest_to_rest.jsonl")
+    assert [x["kind"] for x in rows] == ["reference"] + ["row"] * 4
+    summary = json.loads((tmp_path / "work_precision" / "so3_rest_to_rest.json").read_text())
+    ref = summary["reference"]
+    assert ref["N"] == [16, 32] and ref["check"]["cost"] is not None
+    assert ref["relative_uncertainty"] < 1e-4, ref
+    assert {(x["method"], x["N"]) for x in summary["rows"]} == {
+        (m, N) for m in ("order4", "rk4_quat") for N in (8, 16)}
+    for x in summary["rows"]:
+        assert x["status"] == "Solve_Succeeded" and x["minimum"] == "same", x
+        assert 0 < x["cost_error"] < 1e-1 and x["replay_error"] > 0 and x["seconds"] > 0
+    assert (tmp_path / "figures" / "work_precision_so3_rest_to_rest.png").read_bytes()[:8] \
+        == PNG
+
+
+def test_an_interrupted_run_keeps_its_finished_rows(tmp_path: Path, monkeypatch) -> None:
+    """Ctrl-C during the third timed solve: exit 130, the reference and two rows kept."""
+    real = workprecision.timed_solve
+    calls = []
+
+    def interrupted(*args, **kwargs):
+        calls.append(args)
+        if len(calls) == 3:
+            raise KeyboardInterrupt
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(workprecision, "timed_solve", interrupted)
+    r = work_precision(tmp_path)
+    assert r.exit_code == 130
+    jsonl = tmp_path / "work_precision" / "so3_rest_to_rest.jsonl"
+    assert "interrupted; the finished rows are kept in" in r.output and jsonl.name in r.output
+    rows = read_rows(jsonl)
+    assert [x["kind"] for x in rows] == ["reference", "row", "row"]
+    assert [(x["method"], x["N"]) for x in rows[1:]] == [("order4", 8), ("order4", 16)]
+    assert not (tmp_path / "work_precision" / "so3_rest_to_rest.json").exists()
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--schemes", "order3"], "unknown scheme 'order3'"),
+    (["--schemes", "order2:cubic"], "unknown retraction 'cubic'"),
+    (["--N", "1,8"], "N must be at least 2"),
+    (["--N", "8,x"], "is not a comma-separated list of integers"),
+    (["--reference-N", "100"], "power of two"),
+    (["--repeats", "0"], "--repeats must be at least 1"),
+], ids=["scheme", "retraction", "N", "N-text", "reference-N", "repeats"])
+def test_bad_input_exits_2_with_the_option_named(tmp_path: Path, args: list[str],
+                                                 message: str) -> None:
+    r = runner.invoke(app, ["bench", "work-precision", str(SO3), "--out", str(tmp_path), *args])
+    assert r.exit_code == 2, r.output
+    assert message in r.output and "Traceback" not in r.output
+
+
+@pytest.mark.parametrize("command", ["work-precision", "stability"])
+def test_a_missing_file_exits_2(tmp_path: Path, command: str) -> None:
+    r = runner.invoke(app, ["bench", command, str(tmp_path / "nope.yaml"), "--out",
+                            str(tmp_path)])
+    assert r.exit_code == 2 and "nope.yaml" in r.output and "check the path" in r.output
+
+
+def test_stability_needs_an_attitude(tmp_path: Path) -> None:
+    r = runner.invoke(app, ["bench", "stability", str(SO3), "--out", str(tmp_path),
+                            "--state", "Omega"])
+    assert r.exit_code == 2 and "no SO(3) state" in r.output, r.output
+
+
+def test_stability_map_writes_cells_with_messages(tmp_path: Path) -> None:
+    r = runner.invoke(app, ["bench", "stability", str(SO3), "--out", str(tmp_path), "-q",
+                            "--name", "so3", "--schemes", "order2,rk4_euler", "--N", "32",
+                            "--angles", "2.0"])
+    assert r.exit_code == 0, r.output
+    summary = json.loads((tmp_path / "stability" / "so3.json").read_text())
+    cells = {c["method"]: c for c in summary["cells"]}
+    assert cells["order2"]["outcome"] == "converged"
+    euler = cells["rk4_euler"]
+    assert euler["outcome"] in ("failed", "off target", "unverified") and euler["message"]
+    assert "gimbal lock" in euler["message"]
+    assert len(read_rows(tmp_path / "stability" / "so3.jsonl")) == 3  # reference, 2 cells
+    assert (tmp_path / "figures" / "stability_so3.png").read_bytes()[:8] == PNG
+
+
+def test_euler_angles_fail_through_pitch_90_where_ours_succeed() -> None:
+    """A 2 rad slew about the body y axis passes pitch 90 degrees (gimbal lock)."""
+    cfg = files.load(SO3, [manoeuvre("R", [0, 1, 0], 2.0)])
+    pb = files.build(cfg)
+    sols = {s: og.solve(pb, 32, scheme=s, ipopt=cfg.file.solver.ipopt, multistart=False)
+            for s in ("order2", "order4", "rk4_euler")}
+    assert sols["order2"].success and sols["order4"].success
+    euler = sols["rk4_euler"]
+    assert not euler.success
+    if euler.status == "Solve_Succeeded":
+        miss = euler.diagnostics["replay"]["max_terminal_error"]
+        assert miss >= 100 * sols["order2"].diagnostics["replay"]["max_terminal_error"]
+
+
+def test_time_at_equal_accuracy_is_read_on_the_log_log_line() -> None:
+    rows = [{"N": 8, "e": 1e-2, "seconds": 1.0}, {"N": 16, "e": 1e-4, "seconds": 4.0}]
+    t, bound = time_at(rows, "e", 1e-3)
+    assert math.isclose(t, 2.0) and not bound
+    assert time_at(rows, "e", 1e-1) == (1.0, True)  # the coarsest grid is more accurate
+    assert time_at(rows, "e", 1e-5) is None
+    base = [{"N": 8, "e": 1e-1, "seconds": 1.0}, {"N": 16, "e": 1e-3, "seconds": 4.0}]
+    ours = [{"N": 8, "e": 5e-3, "seconds": 0.1}, {"N": 16, "e": 5e-5, "seconds": 0.4}]
+    found = {c["level"]: c for c in compare({"rk4_quat": base, "order4": ours}, "e")}
+    assert set(found) == {1e-2, 1e-3}  # at 1e-1 the baseline's own time is only a bound
+    assert found[1e-2]["lower_bound"] and math.isclose(found[1e-2]["ratio"], 2.0 / 0.1)
+    t_ours = 0.1 * 4 ** (math.log(5) / math.log(100))
+    assert math.isclose(found[1e-3]["ratio"], 4.0 / t_ours) and not found[1e-3]["lower_bound"]
+    assert headline(list(found.values()), 1e-2)["level"] == 1e-3  # interpolated first

@@ -1,0 +1,64 @@
+"""Compiled evaluation (solver.jit): the same solve as the virtual machine's, a library cached
+per structure, and a clear error without a C compiler (issue 18)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import ocgroupoid as og
+from ocgroupoid.errors import ConfigError
+from ocgroupoid.models.heavy_top import heavy_top
+from ocgroupoid.models.rigid_body import rigid_body
+
+
+@pytest.fixture(autouse=True)
+def own_cache(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    monkeypatch.setenv("OCGROUPOID_JIT_CACHE", str(tmp_path / "jit"))
+    return tmp_path / "jit"
+
+
+@pytest.mark.parametrize("factory, scheme", [(rigid_body, "order2"), (rigid_body, "order4"),
+                                             (heavy_top, "order2"), (rigid_body, "rk4_quat")])
+def test_a_compiled_solve_equals_the_virtual_machine_solve(factory, scheme: str) -> None:
+    vm = og.compile(factory(), N=24, scheme=scheme).solve(multistart=False, replay=False)
+    solver = og.compile(factory(), N=24, scheme=scheme, jit=True)
+    assert solver.transcription.jit and solver.transcription.jit_compiled
+    jit = solver.solve(multistart=False, replay=False)
+    assert jit.status == vm.status and jit.iterations == vm.iterations
+    assert abs(jit.cost - vm.cost) <= 1e-10 * max(1.0, abs(vm.cost))
+    assert np.max(np.abs(jit.x - vm.x)) <= 1e-10 * max(1.0, float(np.max(np.abs(vm.x))))
+
+
+def test_the_library_is_cached_per_structure(own_cache: Path) -> None:
+    first = og.compile(rigid_body(), N=16, jit=True).transcription
+    again = og.compile(rigid_body(inertia=[3.0, 2.0, 1.0]), N=16, jit=True)
+    assert first.jit_compiled and not again.transcription.jit_compiled  # values are inputs
+    other = og.compile(rigid_body(), N=20, jit=True).transcription
+    assert other.jit_compiled  # another N is another structure
+    assert len(list(own_cache.glob("ocg_jit_*.so"))) == 2
+    assert not list(own_cache.glob(".*"))  # no half-written library left
+
+
+def test_without_a_compiler_jit_says_what_to_do(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("PATH", "/nonexistent")
+    monkeypatch.delenv("CC", raising=False)
+    with pytest.raises(ConfigError, match="solver.jit needs a C compiler"):
+        og.compile(rigid_body(), N=12, jit=True)
+
+
+def test_problem_file_key_reaches_the_solver(tmp_path: Path) -> None:
+    from typer.testing import CliRunner
+
+    from ocgroupoid.cli import app
+
+    so3 = Path(__file__).resolve().parents[1] / "problems" / "so3_rest_to_rest.yaml"
+    out = tmp_path / "sol.json"
+    r = CliRunner().invoke(app, ["solve", str(so3), "-q", "--set", "solver.jit=true", "--set",
+                                 "horizon.N=16", "--set", "solver.multistart=false",
+                                 "--out", str(out)])
+    assert r.exit_code == 0, r.output
+    bad = CliRunner().invoke(app, ["solve", str(so3), "--set", "solver.jit=3"])
+    assert bad.exit_code == 2 and "solver.jit" in bad.output
