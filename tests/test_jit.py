@@ -3,6 +3,7 @@ per structure, and a clear error without a C compiler (issue 18)."""
 
 from __future__ import annotations
 
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -14,12 +15,17 @@ from ocgroupoid.models.heavy_top import heavy_top
 from ocgroupoid.models.rigid_body import rigid_body
 
 
+needs_cc = pytest.mark.skipif(not any(shutil.which(c) for c in ("cc", "gcc", "clang")),
+                              reason="no C compiler on PATH")
+
+
 @pytest.fixture(autouse=True)
 def own_cache(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
     monkeypatch.setenv("OCGROUPOID_JIT_CACHE", str(tmp_path / "jit"))
     return tmp_path / "jit"
 
 
+@needs_cc
 @pytest.mark.parametrize("factory, scheme", [(rigid_body, "order2"), (rigid_body, "order4"),
                                              (heavy_top, "order2"), (rigid_body, "rk4_quat")])
 def test_a_compiled_solve_equals_the_virtual_machine_solve(factory, scheme: str) -> None:
@@ -32,6 +38,7 @@ def test_a_compiled_solve_equals_the_virtual_machine_solve(factory, scheme: str)
     assert np.max(np.abs(jit.x - vm.x)) <= 1e-10 * max(1.0, float(np.max(np.abs(vm.x))))
 
 
+@needs_cc
 def test_the_library_is_cached_per_structure(own_cache: Path) -> None:
     first = og.compile(rigid_body(), N=16, jit=True).transcription
     again = og.compile(rigid_body(inertia=[3.0, 2.0, 1.0]), N=16, jit=True)
@@ -49,6 +56,7 @@ def test_without_a_compiler_jit_says_what_to_do(monkeypatch: pytest.MonkeyPatch)
         og.compile(rigid_body(), N=12, jit=True)
 
 
+@needs_cc
 def test_problem_file_key_reaches_the_solver(tmp_path: Path) -> None:
     from typer.testing import CliRunner
 
