@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import re
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Any
 
@@ -69,6 +69,11 @@ def nlpsol_options(ipopt: dict[str, Any] | None, fns: dict[str, ca.Function]) ->
     return opts
 
 
+#: IPOPT options of a primal-dual warm start (Transcription.warm_solver)
+WARM_IPOPT = {"ipopt.warm_start_init_point": "yes", "ipopt.warm_start_bound_push": 1e-9,
+              "ipopt.warm_start_slack_bound_push": 1e-9, "ipopt.warm_start_mult_bound_push": 1e-9,
+              "ipopt.mu_init": 1e-6}
+
 STEPS = ("uniform", "adaptive")
 #: adaptive steps stay within [STEP_RANGE[0], STEP_RANGE[1]] times the uniform step T/N
 STEP_RANGE = (0.1, 10.0)
@@ -109,10 +114,16 @@ class Discretization:
 
 @dataclass
 class Guess:
-    """Velocities on the N intervals (N x dim y); the scheme turns them into a point."""
+    """Velocities on the N intervals (N x dim y); the scheme turns them into a point. A warm
+    start carries a whole NLP point ``x`` of the same structure (a previous solution), and
+    its multipliers ``lam_g``, ``lam_x``: IPOPT then starts from the primal-dual point
+    (:attr:`Transcription.warm_solver`)."""
 
     label: str
     xi: np.ndarray
+    x: np.ndarray | None = None
+    lam_g: np.ndarray | None = None
+    lam_x: np.ndarray | None = None
 
 
 @dataclass
@@ -128,6 +139,7 @@ class RawResult:
     success: bool
     iterations: int
     solve_seconds: float
+    lam_x: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
 
 def casadi_name(name: str) -> str:
@@ -473,24 +485,42 @@ class Transcription:
         return ca.nlpsol(self.function_name, "ipopt", self.nlp,
                          {**self._options, "iteration_callback": self._watch})
 
+    @cached_property
+    def warm_solver(self) -> ca.Function:
+        """:attr:`solver` started from a given primal-dual point (IPOPT's
+        ``warm_start_init_point``, its bound pushes small and mu_init low, so that a point
+        near the solution stays near it), built on first use."""
+        return ca.nlpsol(self.function_name, "ipopt", self.nlp, {**self._options, **WARM_IPOPT})
+
     def solve(self, guess: Guess, p: np.ndarray | None = None,
               listener: Listener | None = None) -> RawResult:
         """Run IPOPT from ``guess`` with parameters ``p`` (default: the problem's);
         ``listener(iteration, objective, infeasibility)`` hears every iteration and stops
-        IPOPT by returning True (status ``User_Requested_Stop``)."""
+        IPOPT by returning True (status ``User_Requested_Stop``). A guess with multipliers
+        is a primal-dual warm start (:attr:`warm_solver`; no listener)."""
         p = self.pack() if p is None else np.asarray(p, dtype=float)
-        x0 = self.point(guess, p)
         lbg, ubg, lbx, ubx = self.bounds_function(p)
-        solver = self.solver
-        if listener is not None:
+        warm = self._warm(guess)
+        x0 = guess.x if guess.x is not None and guess.x.size == self.nx else self.point(guess, p)
+        solver, duals = self.solver, {}
+        if warm:
+            solver, duals = self.warm_solver, {"lam_g0": guess.lam_g, "lam_x0": guess.lam_x}
+        elif listener is not None:
             solver = self.watched_solver
             assert self._watch is not None
             self._watch.start(listener, np.array(lbg).ravel(), np.array(ubg).ravel())
         t0 = time.perf_counter()
-        r = solver(x0=x0, p=p, lbg=lbg, ubg=ubg, lbx=lbx, ubx=ubx)
+        r = solver(x0=x0, p=p, lbg=lbg, ubg=ubg, lbx=lbx, ubx=ubx, **duals)
         seconds = time.perf_counter() - t0
         stats = solver.stats()
         status = str(stats["return_status"])
         iterations = 0 if status == "Not_Enough_Degrees_Of_Freedom" else int(stats["iter_count"])
         return RawResult(guess.label, np.array(r["x"]).ravel(), p, np.array(r["lam_g"]).ravel(),
-                         float(r["f"]), status, bool(stats["success"]), iterations, seconds)
+                         float(r["f"]), status, bool(stats["success"]), iterations, seconds,
+                         np.array(r["lam_x"]).ravel())
+
+    def _warm(self, guess: Guess) -> bool:
+        """Whether ``guess`` is a primal-dual point of this NLP (sizes match)."""
+        return (guess.x is not None and guess.x.size == self.nx and guess.lam_g is not None
+                and guess.lam_g.size == self.ng and guess.lam_x is not None
+                and guess.lam_x.size == self.nx)

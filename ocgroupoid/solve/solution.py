@@ -74,6 +74,10 @@ class Solution:
     control_ppoly: dict[str, np.ndarray] = field(default_factory=dict)
     x: np.ndarray = field(default_factory=lambda: np.zeros(0))
     p: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    #: IPOPT's multipliers of the constraints g and of the variable bounds: with x, the
+    #: primal-dual point a re-solve warm-starts from (``Solver.solve(warm=solution)``)
+    lam_g: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    lam_x: np.ndarray = field(default_factory=lambda: np.zeros(0))
     #: the manifold of every state (``SO(3)``, ``SE(3)``, ``S^2``, ``R^2``, ...)
     manifolds: dict[str, str] = field(default_factory=dict)
     #: names and units of what it reports, the prescribed final states and the bounds at the
@@ -142,7 +146,7 @@ class Solution:
             "diagnostics": self.diagnostics,
             "minima": self.minima,
             "hint": self.hint,
-            "nlp": {"x": self.x, "p": self.p},
+            "nlp": {"x": self.x, "p": self.p, "lam_g": self.lam_g, "lam_x": self.lam_x},
         })
 
     def to_json(self, path: str | Path | None = None, indent: int | None = 1) -> str:
@@ -183,4 +187,6 @@ class Solution:
             manifolds=dict(d.get("manifolds", {})), labels=dict(d.get("labels", {})),
             hint=d.get("hint", ""), x=np.array(d.get("nlp", {}).get("x", []), dtype=float),
             p=np.array(d.get("nlp", {}).get("p", []), dtype=float),
+            lam_g=np.array(d.get("nlp", {}).get("lam_g", []), dtype=float),
+            lam_x=np.array(d.get("nlp", {}).get("lam_x", []), dtype=float),
         )

@@ -124,7 +124,8 @@ class Solver:
               final: dict[str, Any] | None = None, T: float | None = None,
               multistart: bool | int = False, continuation: Sequence[int] | None = None,
               guess: Guess | None = None, replay: bool = True, progress: Progress = _noop,
-              replay_tolerance: float = REPLAY_TOLERANCE) -> Solution:
+              replay_tolerance: float = REPLAY_TOLERANCE, warm: Solution | None = None
+              ) -> Solution:
         """Solve with IPOPT and return a diagnosed Solution; ``success`` is the
         :mod:`~ocgroupoid.solve.verdict` (IPOPT converged and the solution checked out).
 
@@ -137,7 +138,19 @@ class Solver:
         through the continuous dynamics (a few ms; it decides whether the plan lands,
         ``replay_tolerance``). ``progress`` hears each start and, every 0.25 s, IPOPT's
         iteration. Ctrl-C stops the solve with the best point so far, ``status: interrupted``.
+        ``warm``: a Solution of this compiled problem (same N and structure) to start from,
+        primal and dual (IPOPT's warm start), for re-solves with new parameters or boundary
+        values; one start, no continuation.
         """
+        if warm is not None:
+            if warm.x.size != self.transcription.nx or warm.lam_g.size != self.transcription.ng:
+                raise ConfigError(
+                    f"warm: the solution has {warm.x.size} variables and {warm.lam_g.size} "
+                    f"multipliers, this NLP {self.transcription.nx} and "
+                    f"{self.transcription.ng}: warm-start from a solution of the same compiled "
+                    "problem (same N and structure), or pass guess= instead")
+            guess = Guess("warm start", np.zeros((0, 0)), warm.x, warm.lam_g, warm.lam_x)
+            multistart, continuation = False, None
         levels = sorted(set(int(n) for n in (continuation or [])))
         if any(n >= self.disc.N for n in levels):
             raise ConfigError(f"continuation grids must be coarser than N={self.disc.N}: {levels}")

@@ -6,7 +6,8 @@ the NLP only if this process has not built it already; every point is solved thr
 
 Warm starts (``warm``): the points of a chunk are solved in sweep order, and a point whose
 grid neighbour (one step back or forward along one axis, same random sample) was solved
-successfully in this chunk may start from that solution (:func:`~ocgroupoid.solve.interpolate`).
+successfully in this chunk may start from that solution: its point and multipliers (IPOPT's
+primal-dual warm start, :attr:`~ocgroupoid.nlp.transcription.Transcription.warm_solver`).
 ``"fallback"`` (the default) starts cold (the geodesic guess, or the file's multi-start and
 continuation) and tries the neighbour only when the cold start fails, so a point that solves
 cold gives exactly the result of solving it alone, whatever the chunking. ``"first"`` tries
@@ -149,8 +150,11 @@ def _attempts(solver: Solver, cfg: Config, args: dict[str, Any],
     def warm() -> Solution:
         assert near is not None
         tr = solver.transcription
-        xi = interpolate(tr, near[1].x, near[1].p, tr.N).xi
-        return solver.solve(**args, guess=Guess(f"warm from {near[0]}", xi))
+        sol = near[1]
+        xi = interpolate(tr, sol.x, sol.p, tr.N).xi
+        # primal-dual when the neighbour's NLP is this one (a chunk shares its structure)
+        return solver.solve(**args, guess=Guess(f"warm from {near[0]}", xi, sol.x, sol.lam_g,
+                                                sol.lam_x))
 
     if near is None or mode == "off":
         return cold(), False
