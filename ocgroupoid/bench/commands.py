@@ -7,8 +7,9 @@ solve, 2 bad input (one line, no traceback), 130 interrupted (the finished rows 
 
 from __future__ import annotations
 
+from contextlib import contextmanager
 from pathlib import Path
-from typing import Optional
+from typing import Callable, Iterator, Optional
 
 import typer
 from rich.console import Console
@@ -31,8 +32,20 @@ def _fail(message: str, code: int = 2) -> None:
     raise typer.Exit(code)
 
 
-def _interrupted(rows: Path) -> None:
-    _fail(f"interrupted; the finished rows are kept in {rows}", 130)
+@contextmanager
+def _failures(rows: Callable[[], Path]) -> Iterator[None]:
+    """Errors as exit codes: a solver failure 1, bad input 2 (one line each), Ctrl-C 130
+    naming where the finished ``rows()`` are kept."""
+    from ..errors import OcgError, SolverError
+
+    try:
+        yield
+    except SolverError as e:
+        _fail(str(e), 1)
+    except OcgError as e:
+        _fail(str(e))
+    except KeyboardInterrupt:
+        _fail(f"interrupted; the finished rows are kept in {rows()}", 130)
 
 
 @bench.command("work-precision")
@@ -59,14 +72,14 @@ def work_precision_command(
     Median IPOPT time, iterations, relative cost error against a reference and replay
     terminal error for every method and N: a JSONL row per solve as it goes, a summary JSON
     (with the time ratios at equal accuracy) and a log-log work-precision chart."""
-    from ..errors import ConfigError, OcgError, SolverError
+    from ..errors import ConfigError
+    from ..progress import progress_bar
     from ..solve.outputs import check_folder
     from .methods import WORK_PRECISION, parse_grids, parse_methods
-    from .progress import progress_bar
     from .workprecision import DEFAULT_NS, outputs, work_precision
 
     where = None
-    try:
+    with _failures(lambda: where.rows if where else out_dir):
         check_folder(out_dir, "--out")
         methods = parse_methods(schemes, WORK_PRECISION)
         Ns = parse_grids(grids, DEFAULT_NS)
@@ -76,15 +89,6 @@ def work_precision_command(
         with progress_bar(err, quiet) as bar:
             summary, where = work_precision(file, set_, out_dir, methods, Ns, repeats,
                                             reference_N, name, bar)
-    except SolverError as e:
-        _fail(str(e), 1)
-        return
-    except OcgError as e:
-        _fail(str(e))
-        return
-    except KeyboardInterrupt:
-        _interrupted(where.rows if where else out_dir)
-        return
     if not quiet:
         out.print(_ratios(summary))
         out.print(f"rows {where.rows}, summary {where.summary}, chart {where.chart}")
@@ -128,14 +132,13 @@ def stability_command(
     Slews of every angle on every N, each cell converged, unverified, off group, off target,
     other minimum or failed, with the message a user gets; a JSONL row per solve as it goes,
     a summary JSON and a map (PNG)."""
-    from ..errors import OcgError, SolverError
+    from ..progress import progress_bar
     from ..solve.outputs import check_folder
     from .methods import STABILITY, parse_floats, parse_grids, parse_methods
-    from .progress import progress_bar
     from .stability import DEFAULT_ANGLES, DEFAULT_NS, outputs, stability
 
     where = None
-    try:
+    with _failures(lambda: where.rows if where else out_dir):
         check_folder(out_dir, "--out")
         methods = parse_methods(schemes, STABILITY)
         Ns = parse_grids(grids, DEFAULT_NS)
@@ -145,15 +148,6 @@ def stability_command(
         with progress_bar(err, quiet) as bar:
             summary, where = stability(file, set_, out_dir, methods, Ns, slews, direction,
                                        state, multistart, name, bar)
-    except SolverError as e:
-        _fail(str(e), 1)
-        return
-    except OcgError as e:
-        _fail(str(e))
-        return
-    except KeyboardInterrupt:
-        _interrupted(where.rows if where else out_dir)
-        return
     if not quiet:
         counts: dict[str, int] = {}
         for c in summary["cells"]:

@@ -9,10 +9,13 @@ reconstruction equations (``G.state_rate``: ``dR/dt = R hat(Omega)``, ...).
 
 The replay (:mod:`ocgroupoid.solve.replay`) integrates it; the shooting baselines
 (:mod:`ocgroupoid.nlp.schemes.shooting`) discretise it. Any other problem has no continuous
-dynamics, and :attr:`Dynamics.reason` says why.
+dynamics, and :attr:`Dynamics.reason` says why. :func:`rk4` is the one classical Runge-Kutta
+step they all take (the replay, the shooting baselines, the simulator's comparison).
 """
 
 from __future__ import annotations
+
+from typing import Any, Callable
 
 import casadi as ca
 
@@ -92,3 +95,13 @@ class Dynamics:
         self.velocity = ca.Function("velocity", [s, u, pb.P], [ysol])
         self.rhs = ca.Function("rhs", [s, u, pb.P], [G.state_rate(s, ysol)])
         self.implied = {name for name, _ in pb.constraints}
+
+
+def rk4(f: Callable[[Any, float], Any], z: Any, h: Any) -> Any:
+    """One classical RK4 step of ``dz/dt = f(z, s)`` over h, ``s`` the fraction of the step
+    at which f is sampled (0, 1/2, 1: a time-dependent control is read there)."""
+    k1 = f(z, 0.0)
+    k2 = f(z + h / 2 * k1, 0.5)
+    k3 = f(z + h / 2 * k2, 0.5)
+    k4 = f(z + h * k3, 1.0)
+    return z + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)

@@ -114,23 +114,23 @@ def check(problem: Problem, N: int, retraction: str = "cayley", rule: str = DEFA
           steps: str = "uniform") -> CheckReport:
     """Build the NLP at the file's N (dimensions) and at a small N (redundancy test)."""
     disc = Discretization(N, retraction, rule, scheme, steps)
-    tr = Transcription(problem, disc, ipopt)
+    capped = {**(ipopt or {}), "max_iter": SMALL_ITER}  # the one solve: implied_conditions
+    tr = Transcription(problem, disc, capped)
     blocks: dict[str, int] = {}
     for b in tr.blocks:
         key = "final conditions" if b.kind is Kind.FINAL_CONDITION else b.kind.value
         blocks[key] = blocks.get(key, 0) + b.m * b.ncols
     given, free = boundary_lists(tr)
     n_eq = len(equality_rows(tr, tr.pack()))
-    small = tr if N <= SMALL_N else Transcription(problem, replace(disc, N=SMALL_N), ipopt)
+    small = tr if N <= SMALL_N else Transcription(problem, replace(disc, N=SMALL_N), capped)
     return CheckReport(tr.nx, blocks, tr.nx - n_eq, tr.ng - n_eq, given, free,
-                       redundant_rows(small) or implied_conditions(problem, small.disc, ipopt))
+                       redundant_rows(small) or implied_conditions(small))
 
 
-def implied_conditions(problem: Problem, disc: Discretization,
-                       ipopt: dict[str, Any] | None) -> list[str]:
+def implied_conditions(tr: Transcription) -> list[str]:
     """Conditions implied on the feasible set: the rank test at the point a short solve of
-    the small grid reaches (module docstring)."""
-    tr = Transcription(problem, disc, {**(ipopt or {}), "max_iter": SMALL_ITER})
+    the small grid ``tr`` (built with ``max_iter`` :data:`SMALL_ITER`) reaches (module
+    docstring)."""
     p = tr.pack()
     r = tr.solve(geodesic_guesses(tr, p)[0], p)
     return dependent_conditions(tr, r.x, r.p)

@@ -20,7 +20,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from ..nlp.dynamics import Dynamics
+from ..nlp.dynamics import Dynamics, rk4
 from ..nlp.transcription import Transcription
 
 #: RK4 substeps per piece: the first pair compared, and the most ever taken
@@ -118,12 +118,7 @@ class Replay:
 
             dt, zz = h / M, z
             for i in range(M):
-                t = i * dt
-                k1 = f(zz, t)
-                k2 = f(zz + dt / 2 * k1, t + dt / 2)
-                k3 = f(zz + dt / 2 * k2, t + dt / 2)
-                k4 = f(zz + dt * k3, t + dt)
-                zz = zz + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+                zz = rk4(lambda x, s, t=i * dt: f(x, t + s * dt), zz, dt)
             piece = ca.Function("piece", [z, c, h, P], [zz])
             self._cache[key] = piece.mapaccum(n)
         return self._cache[key]

@@ -40,6 +40,7 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 
 from ..errors import ConfigError, DimensionError, SolverError
 from ..model.problem import Problem
+from ..nlp import dynamics
 from ..nlp.dynamics import Dynamics
 from ..nlp.schemes import DEFAULT_RULE, NodeMidpoint
 
@@ -181,13 +182,8 @@ def rk4_step(f: ca.Function) -> ca.Function:
     z = ca.SX.sym("z", f.size1_in(0))
     u0, u1 = ca.SX.sym("u0", f.size1_in(1)), ca.SX.sym("u1", f.size1_in(1))
     h, P = ca.SX.sym("h"), ca.SX.sym("P", f.size1_in(2))
-    um = (u0 + u1) / 2
-    k1 = f(z, u0, P)
-    k2 = f(z + h / 2 * k1, um, P)
-    k3 = f(z + h / 2 * k2, um, P)
-    k4 = f(z + h * k3, u1, P)
     return ca.Function("rk4_step", [z, u0, u1, h, P],
-                       [z + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)])
+                       [dynamics.rk4(lambda x, s: f(x, (1 - s) * u0 + s * u1, P), z, h)])
 
 
 def energy(problem: Problem) -> ca.SX:

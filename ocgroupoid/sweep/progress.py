@@ -6,16 +6,8 @@ from contextlib import contextmanager
 from typing import TYPE_CHECKING, Any, Iterator
 
 from rich.console import Console
-from rich.progress import (
-    BarColumn,
-    MofNCompleteColumn,
-    Progress,
-    TaskID,
-    TextColumn,
-    TimeElapsedColumn,
-    TimeRemainingColumn,
-)
 
+from .. import progress
 from .run import Progress as Callback
 
 if TYPE_CHECKING:
@@ -27,27 +19,14 @@ def progress_bar(console: Console, quiet: bool = False) -> Iterator[Callback]:
     """A :class:`~ocgroupoid.sweep.run.Progress` callback drawing a bar on ``console``
     (failed points counted in the description) from its first call, so that bad input
     shows only its message; silent when ``quiet``."""
-    if quiet:
-        yield lambda finished, total, rec: None
-        return
-    bar = Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
-                   TimeElapsedColumn(), TimeRemainingColumn(), console=console)
-    task: TaskID | None = None
     failed = 0
+    with progress.progress_bar(console, quiet) as bar:
+        def update(finished: int, total: int, rec: dict[str, Any] | None) -> None:
+            nonlocal failed
+            failed += rec is not None and not rec["success"]
+            bar(f"points ({failed} failed)" if failed else "points", finished, total)
 
-    def update(finished: int, total: int, rec: dict[str, Any] | None) -> None:
-        nonlocal task, failed
-        if task is None:
-            bar.start()
-            task = bar.add_task("points", total=total)
-        failed += rec is not None and not rec["success"]
-        bar.update(task, completed=finished, total=total,
-                   description=f"points ({failed} failed)" if failed else "points")
-
-    try:
         yield update
-    finally:
-        bar.stop()
 
 
 def summary(df: pd.DataFrame) -> str:

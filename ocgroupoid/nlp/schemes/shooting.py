@@ -28,7 +28,7 @@ import numpy as np
 from ...errors import ConfigError
 from ...model.problem import Problem
 from ..assembly import Block, Kind
-from ..dynamics import Dynamics
+from ..dynamics import Dynamics, rk4
 from ..layout import Layout
 from .base import Pick, Readout, Scheme
 from .coordinates import Coordinates, coordinates
@@ -94,16 +94,16 @@ class RK4Shooting(Scheme):
             y = self.dynamics.velocity(s, u, pb.P)
             return self.z_rate(z, y), self.stages.at(quantities, s, y)
 
-        h = T / self.N
-        k1, q1 = field(X)
-        k2, q2 = field(X + h / 2 * k1)
-        k3, q3 = field(X + h / 2 * k2)
-        k4, q4 = field(X + h * k3)
-        L = h / 6 * (q1[0] + 2 * q2[0] + 2 * q3[0] + q4[0])
-        self.flow = ca.Function("flow", [X, u, T, pb.P],
-                                [X + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4), L],
+        def with_cost(XL: ca.SX, _: float) -> ca.SX:
+            """The dynamics with the running cost as one more state: its RK4 step is the
+            cost quadrature along the same stages."""
+            rate, q = field(XL[:nX])
+            return ca.vertcat(rate, q[0])
+
+        XL = rk4(with_cost, ca.vertcat(X, 0), T / self.N)
+        self.flow = ca.Function("flow", [X, u, T, pb.P], [XL[:nX], XL[nX]],
                                 ["X", "u", "T", "P"], ["X_next", "L"])
-        self.at_start = ca.Function("at_start", [X, u, pb.P], q1[1:],
+        self.at_start = ca.Function("at_start", [X, u, pb.P], field(X)[1][1:],
                                     ["X", "u", "P"], ["Phi", "H", "controls"])
         self.n_X = nX
 

@@ -1,9 +1,10 @@
-"""What the command line shows while a benchmark runs: a rich progress bar over its solves."""
+"""A rich progress bar that appears on its first update, for the commands that run many
+solves (``sweep``, ``bench``): bad input before the first solve shows only its message."""
 
 from __future__ import annotations
 
 from contextlib import contextmanager
-from typing import Iterator
+from typing import Callable, Iterator
 
 from rich.console import Console
 from rich.progress import (
@@ -16,13 +17,14 @@ from rich.progress import (
     TimeRemainingColumn,
 )
 
-from .workprecision import Progress as Callback
+#: ``update(description, finished, total)``
+Update = Callable[[str, int, int], None]
 
 
 @contextmanager
-def progress_bar(console: Console, quiet: bool = False) -> Iterator[Callback]:
-    """A ``(description, finished, total)`` callback drawing a bar on ``console`` from its
-    first call (bad input shows only its message); silent when ``quiet``."""
+def progress_bar(console: Console, quiet: bool = False) -> Iterator[Update]:
+    """An :data:`Update` callback drawing a bar on ``console`` from its first call; silent
+    when ``quiet``."""
     if quiet:
         yield lambda *_: None
         return
