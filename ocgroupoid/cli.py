@@ -56,9 +56,10 @@ def summary(sol: Any) -> Table:
         t.add_row("final time (free)", f"{sol.T:.10g} in [{lo:g}, {hi:g}]"
                   + (f", {disc['steps']} steps" if disc.get("steps") == "adaptive" else ""))
     t.add_row("build time", f"{sol.build_seconds * 1e3:.1f} ms")
-    t.add_row("IPOPT time, best start", f"{sol.solve_seconds * 1e3:.1f} ms")
+    t.add_row("solver time, best start", f"{sol.solve_seconds * 1e3:.1f} ms ({sol.backend})")
     if sol.starts > 1:
-        t.add_row(f"IPOPT time, all {sol.starts} starts", f"{sol.ipopt_seconds_total * 1e3:.1f} ms")
+        t.add_row(f"solver time, all {sol.starts} starts",
+                  f"{sol.ipopt_seconds_total * 1e3:.1f} ms")
     t.add_row("EL residual (max over nodes)", f"{d['euler_lagrange_residual_max']:.2e}"
               if "euler_lagrange_residual_max" in d else "none: the scheme is not variational")
     t.add_row("distance from manifold",
@@ -123,7 +124,8 @@ def solve(
         else:
             with _status("building the NLP...", quiet):
                 solver = compile_problem(problem, f.horizon.N, d.retraction, d.rule,
-                                         f.solver.ipopt, d.scheme, d.steps, f.solver.jit)
+                                         f.solver.ipopt, d.scheme, d.steps, f.solver.jit,
+                                         f.solver.backend)
             with _status("solving...", quiet) as status:
                 sol = solver.solve(multistart=f.solver.multistart,
                                    continuation=f.solver.continuation or None,
@@ -144,7 +146,7 @@ def solve(
         out.print(summary(sol))
         grids = len(sol.diagnostics.get("accuracy", {}).get("levels", []))
         out.print(f"total {time.perf_counter() - t0:.2f} s (build, "
-                  + (f"{grids} grids" if grids else f"{sol.starts} IPOPT start"
+                  + (f"{grids} grids" if grids else f"{sol.starts} start"
                      f"{'s' if sol.starts > 1 else ''}") + ", diagnostics)"
                   + (f"; solution written to {target}" if target else ""))
     from rich.markup import escape
@@ -172,7 +174,8 @@ def _solve_to_accuracy(problem: Any, f: Any, quiet: bool) -> Any:
             s.multistart, *f.horizon.grids,
             progress=status.update if status is not None else _silent,
             report=_silent if quiet else lambda level: err.print(grid_line(level),
-                                                                 highlight=False))
+                                                                 highlight=False),
+            jit=s.jit, backend=s.backend)
 
 
 def grid_line(level: Any) -> str:
@@ -393,6 +396,7 @@ def export_c_command(
         with _status("exporting C code...", False):
             done = export_c(files.build(cfg), out_dir, N, d.retraction, d.rule,
                             f.solver.ipopt, scheme=d.scheme, steps=d.steps, force=force,
+                            backend=f.solver.backend,
                             positive=positive_parameters(cfg.spec.parameters))
         if build:
             with _status("building with make...", False):

@@ -1,10 +1,10 @@
-"""Virtual machine against compiled evaluation (``solver.jit``), every problem file, N = 16 to
-1024, both schemes: the median IPOPT time of one solve, the iterations, the time to generate
-and compile the library, and the break-even (solves after which compiling has paid for
-itself). One start (the geodesic) per solve, the problem file's other settings.
-
-The stage-structured solver (fatrop) is not measured: it needs a stage-form transcription,
-which the package does not have yet (issue 18).
+"""The NLP backends, every problem file, N = 16 to 1024, both schemes: IPOPT or fatrop (the
+stage form), each with the virtual machine or compiled evaluation (``solver.jit``). Per
+configuration: the median wall time of one solve, the iterations, the cost, the time to
+generate and compile the library; per problem, N and scheme: the speed-up of the best
+configuration over IPOPT with the virtual machine (the default before issue 18) and the
+break-even of compiling (solves after which it has paid for itself). One start (the
+geodesic) per solve, the problem file's other settings.
 
 Writes ``bench_backends.json`` (a row per finished configuration, as it goes) and
 ``bench_backends.png`` (time per solve against N, one panel per problem file).
@@ -27,31 +27,53 @@ from ocgroupoid.solve import compile as compile_problem
 PROBLEMS = Path(__file__).resolve().parent.parent / "problems"
 
 
+CONFIGS = (("ipopt", False), ("ipopt", True), ("fatrop", False), ("fatrop", True))
+
+
+def label(backend: str, jit: bool) -> str:
+    return f"{backend}_{'jit' if jit else 'vm'}"
+
+
 def measure(path: Path, N: int, scheme: str, repeats: int) -> dict[str, Any]:
-    """One configuration: VM and JIT solves from the same start, and the JIT build."""
+    """One problem, N and scheme: every configuration from the same start."""
     cfg = files.load(path, [f"horizon.N={N}", f"discretization.scheme={scheme}"])
     d, f = cfg.file.discretization, cfg.file
     problem = files.build(cfg)
     row: dict[str, Any] = {"problem": path.stem, "N": N, "scheme": scheme}
-    for backend, jit in (("vm", False), ("jit", True)):
-        t0 = time.perf_counter()
-        solver = compile_problem(problem, N, d.retraction, d.rule, f.solver.ipopt, d.scheme,
-                                 d.steps, jit)
+    for backend, jit in CONFIGS:
+        key = label(backend, jit)
+        try:
+            t0 = time.perf_counter()
+            solver = compile_problem(problem, N, d.retraction, d.rule, f.solver.ipopt, d.scheme,
+                                     d.steps, jit, backend)
+        except Exception as e:  # e.g. a problem fatrop does not accept: recorded
+            row[f"{key}_error"] = f"{type(e).__name__}: {e}"
+            continue
         tr = solver.transcription
-        row[f"{backend}_build_seconds"] = time.perf_counter() - t0
+        row[f"{key}_build_seconds"] = time.perf_counter() - t0
         if jit:
-            row["jit_seconds"] = tr.build_phases["jit"]
+            row[f"{key}_jit_seconds"] = tr.build_phases["jit" if backend == "ipopt" else
+                                                        "fatrop"]
         p = tr.pack()
         guess = tr.guesses(p)[0]
         seconds, r = median_time(lambda: tr.solve(guess, p), repeats)
-        row[f"{backend}_solve_seconds"] = seconds
-        row[f"{backend}_iterations"] = r.iterations
-        row[f"{backend}_cost"] = r.cost
-        row[f"{backend}_status"] = r.status
-    gain = row["vm_solve_seconds"] - row["jit_solve_seconds"]
-    row["speedup"] = row["vm_solve_seconds"] / row["jit_solve_seconds"]
-    row["break_even_solves"] = row["jit_seconds"] / gain if gain > 0 else None
-    row["cost_difference"] = abs(row["vm_cost"] - row["jit_cost"])
+        row[f"{key}_solve_seconds"] = seconds
+        row[f"{key}_iterations"] = r.iterations
+        row[f"{key}_cost"] = r.cost
+        row[f"{key}_status"] = r.status
+        row[f"{key}_solver"] = r.backend  # "ipopt after fatrop": fatrop failed, IPOPT solved
+    old = row["ipopt_vm_solve_seconds"]
+    ok = [label(*c) for c in CONFIGS if row.get(f"{label(*c)}_status") == "Solve_Succeeded"
+          and abs(row[f"{label(*c)}_cost"] - row["ipopt_vm_cost"])
+          <= 1e-8 * abs(row["ipopt_vm_cost"])]
+    best = min(ok, key=lambda k: row[f"{k}_solve_seconds"])
+    row["best"], row["speedup"] = best, old / row[f"{best}_solve_seconds"]
+    for backend in ("ipopt", "fatrop"):
+        vm, jit = (row.get(f"{backend}_{m}_solve_seconds") for m in ("vm", "jit"))
+        if vm is not None and jit is not None:
+            gain = vm - jit
+            row[f"{backend}_break_even_solves"] = row[f"{backend}_jit_jit_seconds"] / gain \
+                if gain > 0 else None
     return row
 
 
@@ -67,25 +89,26 @@ def chart(rows: list[dict[str, Any]], out: Path) -> None:
                                                                             // cols)),
                              squeeze=False)
     for ax, name in zip(axes.ravel(), names):
-        for scheme, colour in (("order2", "C0"), ("order4", "C1")):
+        for scheme, style in (("order2", "-"), ("order4", ":")):
             sel = sorted((r for r in rows if r["problem"] == name and r["scheme"] == scheme),
                          key=lambda r: r["N"])
-            if not sel:
-                continue
-            Ns = [r["N"] for r in sel]
-            ax.loglog(Ns, [1e3 * r["vm_solve_seconds"] for r in sel], "o-", color=colour,
-                      label=f"{scheme}, virtual machine")
-            ax.loglog(Ns, [1e3 * r["jit_solve_seconds"] for r in sel], "s--", color=colour,
-                      label=f"{scheme}, compiled (jit)")
+            for (backend, jit), (colour, mark) in zip(CONFIGS, (("C0", "o"), ("C1", "s"),
+                                                               ("C2", "^"), ("C3", "D"))):
+                key = label(backend, jit)
+                pts = [(r["N"], 1e3 * r[f"{key}_solve_seconds"]) for r in sel
+                       if r.get(f"{key}_status") == "Solve_Succeeded"]
+                if pts:
+                    ax.loglog(*zip(*pts), mark + style, color=colour, ms=4,
+                              label=f"{scheme} {backend} {'jit' if jit else 'vm'}")
         ax.set_title(name, fontsize=10)
         ax.set_xlabel("N (intervals)")
-        ax.set_ylabel("IPOPT time per solve [ms]")
+        ax.set_ylabel("time per solve [ms]")
         ax.grid(alpha=0.3, which="both")
-        ax.legend(fontsize=7)
+        ax.legend(fontsize=6, ncol=2)
     for ax in axes.ravel()[len(names):]:
         ax.set_visible(False)
-    fig.suptitle("solver.jit: IPOPT wall time per solve (median), one start; the library "
-                 "is compiled once per structure")
+    fig.suptitle("solver.backend and solver.jit: wall time per solve (median), one start; "
+                 "converged solves only (solid order2, dotted order4)")
     fig.tight_layout()
     fig.savefig(out / "bench_backends.png", dpi=100)
     plt.close(fig)
@@ -94,8 +117,8 @@ def chart(rows: list[dict[str, Any]], out: Path) -> None:
 def main() -> None:
     args = arguments(__doc__.splitlines()[0])
     quick = args.quick
-    if quick:  # CI: a private cache, so that the compile is measured too
-        os.environ["OCGROUPOID_JIT_CACHE"] = tempfile.mkdtemp(prefix="ocg-jit-bench-")
+    # a private cache, so that every compile is measured (a shared one may hold them)
+    os.environ["OCGROUPOID_JIT_CACHE"] = tempfile.mkdtemp(prefix="ocg-jit-bench-")
     paths = [PROBLEMS / "so3_rest_to_rest.yaml"] if quick else sorted(PROBLEMS.glob("*.yaml"))
     Ns = [16, 32] if quick else [16, 64, 256, 1024]
     schemes = ["order2"] if quick else ["order2", "order4"]
@@ -104,7 +127,7 @@ def main() -> None:
     rows: list[dict[str, Any]] = []
     configs = [(p, N, s) for p in paths for s in schemes for N in Ns]
     with progress() as bar:
-        task = bar.add_task("VM vs JIT", total=len(configs))
+        task = bar.add_task("backends", total=len(configs))
         for path, N, scheme in configs:
             bar.update(task, description=f"{path.stem} {scheme} N={N}")
             try:
@@ -116,19 +139,23 @@ def main() -> None:
             bar.advance(task)
     done = [r for r in rows if "error" not in r]
     summary = {f"{r['problem']}/{r['scheme']}/N={r['N']}":
-               {"speedup": r["speedup"], "break_even_solves": r["break_even_solves"]}
-               for r in done}
-    save(args.out, "bench_backends", {"rows": rows, "repeats": repeats, "summary": summary,
-                                      "median_speedup": float(np.median([r["speedup"]
-                                                                         for r in done]))})
+               {"best": r["best"], "speedup": r["speedup"],
+                **{k: r.get(k) for k in ("ipopt_break_even_solves",
+                                         "fatrop_break_even_solves")}} for r in done}
+    save(args.out, "bench_backends", {
+        "rows": rows, "repeats": repeats, "summary": summary,
+        "median_speedup": float(np.median([r["speedup"] for r in done])),
+        "fatrop_vm_over_ipopt_vm": {f"{r['problem']}/{r['scheme']}/N={r['N']}":
+                                    r["ipopt_vm_solve_seconds"] / r["fatrop_vm_solve_seconds"]
+                                    for r in done if r.get("fatrop_vm_status")
+                                    == "Solve_Succeeded"}})
     chart(done, args.out)
     for r in done:
-        be = r["break_even_solves"]
-        even = "-" if be is None else f"{be:.0f}"
-        print(f"{r['problem']:22s} {r['scheme']} N={r['N']:5d}  "
-              f"VM {1e3 * r['vm_solve_seconds']:8.1f} ms  JIT {1e3 * r['jit_solve_seconds']:8.1f}"
-              f" ms  x{r['speedup']:.2f}  compile {r['jit_seconds']:.2f} s  break-even {even}"
-              " solves")
+        times = "  ".join(f"{label(*c)} {1e3 * r[label(*c) + '_solve_seconds']:7.1f} ms"
+                          f" ({r[label(*c) + '_iterations']} it)" for c in CONFIGS
+                          if label(*c) + "_solve_seconds" in r)
+        print(f"{r['problem']:20s} {r['scheme']} N={r['N']:5d}  {times}  best {r['best']} "
+              f"x{r['speedup']:.2f}")
 
 
 if __name__ == "__main__":

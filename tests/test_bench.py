@@ -73,16 +73,36 @@ def test_an_interrupted_run_keeps_its_finished_rows(tmp_path: Path, monkeypatch)
 @pytest.mark.parametrize("args, message", [
     (["--schemes", "order3"], "unknown scheme 'order3'"),
     (["--schemes", "order2:cubic"], "unknown retraction 'cubic'"),
+    (["--schemes", "order2@snopt"], "unknown backend 'snopt'"),
     (["--N", "1,8"], "N must be at least 2"),
     (["--N", "8,x"], "is not a comma-separated list of integers"),
     (["--reference-N", "100"], "power of two"),
     (["--repeats", "0"], "--repeats must be at least 1"),
-], ids=["scheme", "retraction", "N", "N-text", "reference-N", "repeats"])
+], ids=["scheme", "retraction", "backend", "N", "N-text", "reference-N", "repeats"])
 def test_bad_input_exits_2_with_the_option_named(tmp_path: Path, args: list[str],
                                                  message: str) -> None:
     r = runner.invoke(app, ["bench", "work-precision", str(SO3), "--out", str(tmp_path), *args])
     assert r.exit_code == 2, r.output
     assert message in r.output and "Traceback" not in r.output
+
+
+def test_methods_name_their_backend_and_compiled_evaluation() -> None:
+    """``SCHEME[:RETRACTION][@BACKEND][+jit]``: parsed, labelled back the same way, and a
+    method that repeats another's computation (exp on R^n) is named against the same
+    backend."""
+    from ocgroupoid.bench.methods import Method, parse_methods, redundant
+    methods = parse_methods("order4@fatrop+jit,order2:exp@fatrop,rk4_quat+jit,order2@fatrop",
+                            ())
+    assert methods == [Method("order4", "cayley", "fatrop", True),
+                       Method("order2", "exp", "fatrop", False),
+                       Method("rk4_quat", "cayley", "ipopt", True),
+                       Method("order2", "cayley", "fatrop", False)]
+    assert [m.label for m in methods] == ["order4@fatrop+jit", "order2:exp@fatrop",
+                                          "rk4_quat+jit", "order2@fatrop"]
+    plane = files.build(files.load(ROOT / "problems" / "cart_pole.yaml"))
+    assert redundant(methods, plane) == {
+        "order2:exp@fatrop": "identical to order2@fatrop here: every retraction is the "
+                             "translation on R^n"}
 
 
 @pytest.mark.parametrize("command", ["work-precision", "stability"])

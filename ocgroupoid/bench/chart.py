@@ -1,4 +1,4 @@
-"""The work-precision chart: error against IPOPT time, log-log, one line per method.
+"""The work-precision chart: error against solver time, log-log, one line per method.
 
 Two panels: the relative cost error against the reference, and the replay terminal error
 (the plan's miss when its controls drive the continuous dynamics). Lower left is better.
@@ -11,6 +11,7 @@ bottom of the cost panel is below the reference's own uncertainty.
 from __future__ import annotations
 
 import io
+import re
 import textwrap
 from pathlib import Path
 from typing import Any
@@ -29,6 +30,28 @@ NAMES = {"order2": "ours: order2 (cayley)", "order4": "ours: order4 (cayley)",
          "order2:first_order": "ours: order2 (first_order)",
          "rk4_quat": "RK4 shooting, quaternions", "rk4_matrix": "RK4 shooting, matrices",
          "rk4_euler": "RK4 shooting, ZYX Euler angles"}
+#: a method run with another backend or compiled (``order4@fatrop+jit``): a shade of its
+#: scheme's colour and a marker of its own
+SHADES = {"order2": {"+jit": "navy", "@fatrop": "deepskyblue", "@fatrop+jit": "darkviolet"},
+          "order4": {"+jit": "darkgreen", "@fatrop": "yellowgreen",
+                     "@fatrop+jit": "saddlebrown"},
+          "rk4_quat": {"+jit": "darkred", "@fatrop": "salmon", "@fatrop+jit": "maroon"}}
+VARIANT_MARKERS = {"+jit": "D", "@fatrop": "v", "@fatrop+jit": "*"}
+
+
+def style(method: str, i: int) -> tuple[str, str, str, str]:
+    """Colour, line style, marker and legend name of a method's line (``i``: its place,
+    for a method without a style of its own)."""
+    base = re.split("[@+]", method)[0]
+    variant = method[len(base):]
+    color, ls, marker = STYLES.get(base, (f"C{i}", "-", "o"))
+    name = NAMES.get(base, base)
+    if variant:
+        scheme = base.split(":")[0]
+        color = SHADES.get(scheme, {}).get(variant, f"C{i}")
+        marker = VARIANT_MARKERS.get(variant, marker)
+        name += ", " + variant.lstrip("@+").replace("+", ", ")
+    return color, ls, marker, name
 
 
 def _panel(ax: Any, by_method: dict[str, list[dict[str, Any]]], key: str) -> list[float]:
@@ -38,10 +61,9 @@ def _panel(ax: Any, by_method: dict[str, list[dict[str, Any]]], key: str) -> lis
         pts = sorted((r["N"], r["seconds"], r[key], r["success"]) for r in rows if r.get(key))
         if not pts:
             continue
-        color, ls, marker = STYLES.get(method, (f"C{i}", "-", "o"))
+        color, ls, marker, name = style(method, i)
         N, t, e, ok = zip(*pts)
-        ax.loglog(t, e, linestyle=ls, color=color, marker=marker, ms=6, lw=1.6,
-                  label=NAMES.get(method, method))
+        ax.loglog(t, e, linestyle=ls, color=color, marker=marker, ms=6, lw=1.6, label=name)
         for tt, ee, good in zip(t, e, ok):
             if not good:
                 ax.plot(tt, ee, marker=marker, ms=6, color=color, mfc="white",
@@ -66,7 +88,7 @@ def subtitle(summary: dict[str, Any]) -> str:
         parts.append("in another local minimum than the reference's, not drawn: "
                      + ", ".join(other))
     if failed:
-        parts.append("IPOPT failed, not drawn: " + ", ".join(failed))
+        parts.append("the solver failed, not drawn: " + ", ".join(failed))
     return "\n".join(_wrap(p, 150) for p in parts)
 
 
@@ -98,8 +120,8 @@ def work_precision_chart(summary: dict[str, Any], path: Path, dpi: int = 110) ->
         ax.xaxis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
         ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
         ax.xaxis.set_minor_formatter(NullFormatter())
-        ax.set_xlabel(f"IPOPT wall time per solve [s]  (median of at least {s['repeats']} runs "
-                      "from one cold start)")
+        ax.set_xlabel(f"solver wall time per solve [s]  (median of at least {s['repeats']} "
+                      "runs from one cold start)")
         ax.set_ylabel(ylabel)
         ax.set_title(title, fontsize=10)
         ax.grid(alpha=0.3, which="both")

@@ -1,13 +1,15 @@
 """What a benchmark compares: a scheme with a retraction (``order2:exp``), and the grids.
 
-A method is written ``SCHEME`` or ``SCHEME:RETRACTION`` (``order2``, ``order4:exp``,
-``rk4_quat``); the retraction defaults to cayley and is ignored by the RK4 baselines, which
-integrate the continuous dynamics in their own coordinates.
+A method is written ``SCHEME[:RETRACTION][@BACKEND][+jit]`` (``order2``, ``order4:exp``,
+``rk4_quat``, ``order4@fatrop+jit``); the retraction defaults to cayley and is ignored by
+the RK4 baselines, which integrate the continuous dynamics in their own coordinates; the
+backend (``solver.backend``) defaults to ipopt, and ``+jit`` compiles the evaluations
+(``solver.jit``).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from ..errors import ConfigError
 from ..lie.retraction import RETRACTION_NAMES
@@ -15,6 +17,7 @@ from ..lie.rn import Rn
 from ..model.problem import Problem
 from ..nlp.schemes import BASELINES, DEFAULT_RULE, SCHEME_NAMES
 from ..nlp.schemes.coordinates import coordinates
+from ..nlp.transcription import BACKENDS, DEFAULT_BACKEND
 
 
 @dataclass(frozen=True)
@@ -23,6 +26,8 @@ class Method:
 
     scheme: str
     retraction: str = "cayley"
+    backend: str = DEFAULT_BACKEND
+    jit: bool = False
 
     @property
     def baseline(self) -> bool:
@@ -32,8 +37,10 @@ class Method:
     @property
     def label(self) -> str:
         """``order2`` (cayley), ``order2:exp``, ``rk4_quat``: how options and charts name it."""
-        return self.scheme if self.baseline or self.retraction == "cayley" else \
+        name = self.scheme if self.baseline or self.retraction == "cayley" else \
             f"{self.scheme}:{self.retraction}"
+        return name + ("" if self.backend == DEFAULT_BACKEND else f"@{self.backend}") + \
+            ("+jit" if self.jit else "")
 
     def rule(self, file_rule: str) -> str:
         """The problem file's rule applies to order2; every other scheme has only the
@@ -55,7 +62,13 @@ def parse_methods(text: str | None, default: tuple[Method, ...]) -> list[Method]
         return list(default)
     methods = []
     for item in (s.strip() for s in text.split(",")):
-        scheme, _, retraction = item.partition(":")
+        head, jit = (item[:-4], True) if item.endswith("+jit") else (item, False)
+        head, _, backend = head.partition("@")
+        backend = backend or DEFAULT_BACKEND
+        if backend not in BACKENDS:
+            raise ConfigError(f"--schemes: unknown backend {backend!r} in {item!r}; choose "
+                              f"from {', '.join(BACKENDS)} (order4@fatrop, rk4_quat+jit)")
+        scheme, _, retraction = head.partition(":")
         if scheme not in SCHEME_NAMES:
             raise ConfigError(f"--schemes: unknown scheme {scheme!r}; choose from "
                               f"{', '.join(SCHEME_NAMES)} (a retraction after a colon: "
@@ -64,7 +77,7 @@ def parse_methods(text: str | None, default: tuple[Method, ...]) -> list[Method]
         if retraction not in RETRACTION_NAMES:
             raise ConfigError(f"--schemes: unknown retraction {retraction!r} in {item!r}; "
                               f"choose from {', '.join(RETRACTION_NAMES)}")
-        methods.append(Method(scheme, retraction))
+        methods.append(Method(scheme, retraction, backend, jit))
     if len(set(methods)) != len(methods):
         raise ConfigError(f"--schemes names a method twice: {text!r}")
     return methods
@@ -107,11 +120,11 @@ def redundant(methods: list[Method], problem: Problem) -> dict[str, str]:
     present = set(methods)
     out = {}
     for m in methods:
-        if m.baseline and m.scheme != "rk4_quat" and not own_coordinates and \
-                Method("rk4_quat") in present:
-            out[m.label] = "identical to rk4_quat here: no SO(3) factor to carry otherwise"
-        elif not m.baseline and m.retraction != "cayley" and not curved and \
-                Method(m.scheme) in present:
-            out[m.label] = f"identical to {m.scheme} here: every retraction is the " \
+        quat, cayley = replace(m, scheme="rk4_quat"), replace(m, retraction="cayley")
+        if m.baseline and m.scheme != "rk4_quat" and not own_coordinates and quat in present:
+            out[m.label] = f"identical to {quat.label} here: no SO(3) factor to carry " \
+                           "otherwise"
+        elif not m.baseline and m.retraction != "cayley" and not curved and cayley in present:
+            out[m.label] = f"identical to {cayley.label} here: every retraction is the " \
                            "translation on R^n"
     return out

@@ -58,7 +58,7 @@ def timed_solve(problem: Problem, method: Method, N: int, setting: Setting, repe
     (module docstring); raises what building raises (ConfigError, SingularityError)."""
     t0 = time.perf_counter()
     solver = compile(problem, N, method.retraction, method.rule(setting.rule), setting.ipopt,
-                     method.scheme, setting.steps)
+                     method.scheme, setting.steps, method.jit, method.backend)
     tr = solver.transcription
     p = tr.pack()
     guess = cold_start(solver.guesses(tr, p, start is not None), start)

@@ -99,7 +99,7 @@ def check_methods(problem: Problem, methods: list[Method], setting: Setting, N: 
     for m in methods:
         try:
             compile(problem, N, m.retraction, m.rule(setting.rule), setting.ipopt, m.scheme,
-                    setting.steps)
+                    setting.steps, m.jit, m.backend)
         except OcgError as e:
             raise type(e)(f"--schemes {m.label}: {e}") from None
 
@@ -171,6 +171,9 @@ def work_precision(path: Path, overrides: list[str], out: Path, methods: list[Me
         "other_minimum": {"cost_error": OTHER_COST, "path_deviation": OTHER_PATH},
         "replay_units": units(problem), "rows": rows,
         "equal_accuracy": {key: compare(by_method, key) for key in HEADLINE}}
+    for base in sorted(m for m in by_method if m.startswith("rk4_quat") and m != "rk4_quat"):
+        summary[f"equal_accuracy_{base}"] = {key: compare(by_method, key, base)
+                                             for key in HEADLINE}
     summary["headline"] = {key: headline(summary["equal_accuracy"][key], level)
                            for key, level in HEADLINE.items()}
     write_summary(where.summary, summary)

@@ -5,8 +5,10 @@
 - ``ocg_generated.c/.h``: CasADi-generated C of four Functions the Python path evaluates
   too — nothing here computes anything of its own:
 
-  ``ocg_gen_nlpsol(x0, p) -> (x, f, g, lam_g)``  the Transcription's IPOPT instance, called
-  with ``lbg = ubg = 0`` (its stage-wise derivatives come from nlpsol's cache);
+  ``ocg_gen_nlpsol(x0, p) -> (x, f, g, lam_g, lam_x)``  the Transcription's solver (IPOPT, or
+  fatrop on the stage form: ``solver.backend``) with the bounds computed from p (its
+  stage-wise derivatives come from nlpsol's cache), and ``ocg_gen_nlpsol_warm`` the same from
+  a primal-dual point (IPOPT's warm start; fatrop's primal);
   ``ocg_gen_guess(p) -> x0``  the first geodesic guess (:attr:`Transcription.guess_function`)
   through :attr:`Transcription.point_function`;
   ``ocg_gen_pack(values) -> (p, bad)``  :attr:`ParameterValues.pack_function`, the packing of
@@ -19,7 +21,8 @@
 
 One export serves every instance of the model: boundary values, physical parameters and T
 are inputs. Multi-start, continuation and the model's own guess hooks stay in Python: the
-C solver starts from the geodesic guess, or from a warm start the caller gives.
+C solver starts from the geodesic guess, from a point the caller gives, or from an earlier
+result's primal-dual point (``ocg_solve_warm``).
 """
 
 from __future__ import annotations
@@ -44,12 +47,12 @@ from ..model import values as checks
 from ..model.problem import Problem
 from ..nlp.parameters import ParameterValues
 from ..nlp.schemes import DEFAULT_RULE, DEFAULT_SCHEME
-from ..nlp.transcription import C_READOUT_OUTPUTS, Transcription
+from ..nlp.transcription import C_READOUT_OUTPUTS, DEFAULT_BACKEND, Transcription
 from ..solve.outputs import check_folder, write_atomic
 from ..solve.solver import Solver
 
 TEMPLATES = Path(__file__).resolve().parent / "c_templates"
-VERBATIM = ("ocg_solver.h", "ocg_solver.c", "ocg_ipopt_hooks.h", "main.c")
+VERBATIM = ("ocg_solver.h", "ocg_solver.c", "ocg_ipopt_hooks.h", "ocg_fatrop_hooks.h", "main.c")
 GENERATED = "ocg_generated"
 # Prepended to the CasADi-generated file: CasADi's uniform calling convention leaves
 # arguments (mem, iw, w) unused, and the two IPOPT calls are routed through ocg_solver.c.
@@ -59,12 +62,19 @@ GENERATED_PRELUDE = """\
 #if defined(__GNUC__)
 #pragma GCC diagnostic ignored "-Wunused-parameter"
 #endif
-/* IPOPT's return status and iteration count, which the generated solver keeps to itself,
- * are recorded by the wrappers of ocg_ipopt_hooks.h. */
+/* The solver's return status and iteration count, which the generated solver keeps to
+ * itself, are recorded by the wrappers of ocg_ipopt_hooks.h (and ocg_fatrop_hooks.h). */
 #define OCG_ROUTE_IPOPT
 #include "ocg_ipopt_hooks.h"
-
 """
+FATROP_PRELUDE = """\
+#define OCG_ROUTE_FATROP
+#include "ocg_fatrop_hooks.h"
+"""
+#: outputs of the generated solvers (ocg_gen_nlpsol, ocg_gen_nlpsol_warm)
+SOLVE_OUTPUTS = ("x", "f", "g", "lam_g", "lam_x")
+#: the libraries each backend links with (all in the casadi wheel)
+BACKEND_LIBS = {"ipopt": "-lipopt", "fatrop": "-lipopt -lfatrop -lblasfeo"}
 EXPORT_IPOPT = {"print_level": 0, "sb": "yes"}  # stdout carries the JSON, nothing else
 # What export_c wrote (file -> sha256): a folder holding it is one export_c may overwrite.
 MANIFEST = ".ocgroupoid-export.json"
@@ -117,14 +127,25 @@ def pack_function(tr: Transcription) -> ca.Function:
 
 
 def nlpsol_function(tr: Transcription) -> ca.Function:
-    """``ocg_gen_nlpsol(x0, p) -> (x, f, g, lam_g)``: the Transcription's IPOPT instance with
-    the bounds of :attr:`Transcription.bounds_function`, computed from p (a bound given by a
-    parameter is a runtime input of the exported solver)."""
+    """``ocg_gen_nlpsol(x0, p) -> (x, f, g, lam_g, lam_x)``: the Transcription's solver
+    (:meth:`Transcription.solve_graph`) with the bounds of
+    :attr:`Transcription.bounds_function`, computed from p (a bound given by a parameter is a
+    runtime input of the exported solver)."""
     x0, p = ca.MX.sym("x0", tr.nx), ca.MX.sym("p", tr.np)
-    lbg, ubg, lbx, ubx = tr.bounds_function(p)
-    r = tr.solver(x0=x0, p=p, lbg=lbg, ubg=ubg, lbx=lbx, ubx=ubx)
-    return ca.Function("ocg_gen_nlpsol", [x0, p], [r["x"], r["f"], r["g"], r["lam_g"]],
-                       ["x0", "p"], ["x", "f", "g", "lam_g"])
+    r = tr.solve_graph(x0, p)
+    return ca.Function("ocg_gen_nlpsol", [x0, p], [r[k] for k in SOLVE_OUTPUTS],
+                       ["x0", "p"], list(SOLVE_OUTPUTS))
+
+
+def warm_function(tr: Transcription) -> ca.Function:
+    """``ocg_gen_nlpsol_warm(x0, p, lam_g0, lam_x0) -> (x, f, g, lam_g, lam_x)``: the
+    primal-dual warm start of :meth:`Transcription.solve_graph` (fatrop: the primal point)."""
+    x0, p = ca.MX.sym("x0", tr.nx), ca.MX.sym("p", tr.np)
+    lam_g0, lam_x0 = ca.MX.sym("lam_g0", tr.ng), ca.MX.sym("lam_x0", tr.nx)
+    r = tr.solve_graph(x0, p, lam_g0, lam_x0)
+    return ca.Function("ocg_gen_nlpsol_warm", [x0, p, lam_g0, lam_x0],
+                       [r[k] for k in SOLVE_OUTPUTS], ["x0", "p", "lam_g0", "lam_x0"],
+                       list(SOLVE_OUTPUTS))
 
 
 # ------------------------------------------------------------------ the C project
@@ -277,6 +298,8 @@ def model_sources(tr: Transcription, default_p: np.ndarray, guess: str,
         "OCG_N_PARAMETER_FIELDS": len(param_fields), "OCG_NU": len(controls),
         "OCG_N_MULTIPLIER_NAMES": len(multipliers), "OCG_N_POST": len(C_READOUT_OUTPUTS),
         "OCG_SCHEME": _c_string(tr.disc.scheme),
+        "OCG_BACKEND_FATROP": int(tr.fatrop is not None), "OCG_BACKEND": _c_string(tr.backend),
+        "OCG_MAX_ITER": tr.fatrop.max_iter if tr.fatrop is not None else 0,
         "OCG_RETRACTION": _c_string(tr.scheme.retraction), "OCG_RULE": _c_string(tr.disc.rule),
         "OCG_GUESS_LABEL": _c_string(guess),
         "OCG_MANIFOLDS_JSON": _c_string(json.dumps({f.state: f.manifold for f in G.factors})),
@@ -333,14 +356,22 @@ def _blocks_table(values: ParameterValues) -> str:
 
 def _generate(tr: Transcription) -> dict[str, str]:
     """The CasADi-generated ``ocg_generated.c`` (with :data:`GENERATED_PRELUDE`) and ``.h``,
-    generated in a temporary folder."""
-    cg = ca.CodeGenerator(GENERATED, {"with_header": True})
-    for fn in (nlpsol_function(tr), guess_function(tr), pack_function(tr), post_function(tr)):
-        cg.add(fn)
-    with tempfile.TemporaryDirectory(prefix="ocgroupoid-export-") as tmp:
-        cg.generate(tmp + "/")
-        c, h = (Path(tmp) / f"{GENERATED}.{ext}" for ext in ("c", "h"))
-        return {c.name: GENERATED_PRELUDE + c.read_text(), h.name: h.read_text()}
+    and ``ocg_generated_warm.c/.h`` (the warm-start solver: a second IPOPT instance, whose
+    generated callbacks would clash with the first's in one file), generated in a temporary
+    folder."""
+    prelude = GENERATED_PRELUDE + (FATROP_PRELUDE if tr.fatrop is not None else "")
+    out = {}
+    for name, fns in ((GENERATED, (nlpsol_function(tr), guess_function(tr), pack_function(tr),
+                                   post_function(tr))),
+                      (f"{GENERATED}_warm", (warm_function(tr),))):
+        cg = ca.CodeGenerator(name, {"with_header": True})
+        for fn in fns:
+            cg.add(fn)
+        with tempfile.TemporaryDirectory(prefix="ocgroupoid-export-") as tmp:
+            cg.generate(tmp + "/")
+            c, h = (Path(tmp) / f"{name}.{ext}" for ext in ("c", "h"))
+            out[c.name], out[h.name] = prelude + "\n" + c.read_text(), h.read_text()
+    return out
 
 
 def _digest(data: str | bytes) -> str:
@@ -408,7 +439,8 @@ def export_c(problem: Problem | Solver, folder: str | Path, N: int = 64,
              ipopt: dict[str, Any] | None = None, build: bool = False,
              ipopt_lib: str | Path | None = None, ipopt_include: str | Path | None = None,
              cflags: str = "", scheme: str = DEFAULT_SCHEME, steps: str = "uniform",
-             force: bool = False, positive: Collection[str] = ()) -> Export:
+             force: bool = False, positive: Collection[str] = (),
+             backend: str = DEFAULT_BACKEND) -> Export:
     """Write ``problem`` compiled on N intervals as a C project in ``folder``.
 
     ``problem`` may also be a compiled :class:`Solver` (its N, scheme, retraction, rule and
@@ -439,7 +471,7 @@ def export_c(problem: Problem | Solver, folder: str | Path, N: int = 64,
         solver = problem
     else:
         solver = Solver(problem, N, retraction, rule, {**(ipopt or {}), **EXPORT_IPOPT}, scheme,
-                        steps)
+                        steps, backend=backend)
     tr = solver.transcription
     p = tr.pack()
     files: dict[str, str | bytes] = dict(_generate(tr))
@@ -452,6 +484,7 @@ def export_c(problem: Problem | Solver, folder: str | Path, N: int = 64,
             "RULE": tr.disc.rule, "ORDER": pb.order, "NX": tr.nx, "NP": tr.np, "NG": tr.ng,
             "NV": tr.values.size, "VERSION": __version__, "CASADI": ca.__version__,
             "IPOPT_LIB": lib, "IPOPT_INCLUDE": include, "GUESS": _one_line(guess),
+            "BACKEND": tr.backend, "BACKEND_LIBS": BACKEND_LIBS[tr.backend],
             "KEYS": _blocks_table(tr.values)}
     files["Makefile"] = _fill((TEMPLATES / "Makefile.in").read_text(), {
         **info, "IPOPT_LIB": _make_value(lib), "IPOPT_INCLUDE": _make_value(include)})

@@ -14,6 +14,7 @@ from pydantic_core import PydanticCustomError
 from ..lie.retraction import RETRACTION_NAMES
 from ..model.values import Strict, number, positive
 from ..nlp.schemes import SCHEME_NAMES
+from ..nlp.transcription import BACKENDS, DEFAULT_BACKEND
 from ..solve.auto import ACCURACY_MAX, N_MAX, N_MIN
 
 
@@ -185,6 +186,10 @@ class SolverSection(Strict):
     jit: StrictBool = Field(
         False, description="evaluate the NLP as C compiled by the system compiler (cached per "
         "structure): worth it for repeated solves (multi-start, sweeps, large N)")
+    backend: Literal[BACKENDS] = Field(  # type: ignore[valid-type]
+        DEFAULT_BACKEND, description="the NLP solver: ipopt (the whole sparse KKT system), or "
+        "fatrop (the NLP in stage form, factorised stage by stage: faster on long horizons "
+        "and plate-ball problems, less robust on hard nonconvex ones such as cart_pole)")
 
 
 class OutputSection(Strict):

@@ -55,6 +55,9 @@ class Block:
     #: equalities, g = 0)
     bounds: tuple[ca.SX, ca.SX] | None = None
     g_offset: int = 0
+    #: a dynamics block: the stage inputs that are the next stage's state, one per row
+    #: (``g = z[next] - F(other inputs)``, :mod:`~ocgroupoid.nlp.stageform`)
+    next: slice | None = None
 
     @property
     def n_var(self) -> int:

@@ -31,6 +31,7 @@ from ..model.problem import Boundary, Problem
 from ..model.values import check_horizon
 from .assembly import Block, Kind, assemble
 from .boundary import FinalConditions
+from .fatrop import FatropNLP
 from .jit import compiled
 from .layout import Layout, Masks
 from .parameters import ParameterValues
@@ -73,6 +74,11 @@ def nlpsol_options(ipopt: dict[str, Any] | None, fns: dict[str, ca.Function]) ->
 WARM_IPOPT = {"ipopt.warm_start_init_point": "yes", "ipopt.warm_start_bound_push": 1e-9,
               "ipopt.warm_start_slack_bound_push": 1e-9, "ipopt.warm_start_mult_bound_push": 1e-9,
               "ipopt.mu_init": 1e-6}
+
+#: the NLP solvers: IPOPT on the whole sparse KKT system (MUMPS), or fatrop on the stage form
+#: (:mod:`~ocgroupoid.nlp.fatrop`)
+BACKENDS = ("ipopt", "fatrop")
+DEFAULT_BACKEND = "ipopt"
 
 STEPS = ("uniform", "adaptive")
 #: adaptive steps stay within [STEP_RANGE[0], STEP_RANGE[1]] times the uniform step T/N
@@ -140,6 +146,9 @@ class RawResult:
     iterations: int
     solve_seconds: float
     lam_x: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    #: which solver produced it: ``ipopt``, ``fatrop``, or ``ipopt after fatrop`` (fatrop
+    #: failed and IPOPT solved from the same start; solve_seconds counts both)
+    backend: str = "ipopt"
 
 
 def casadi_name(name: str) -> str:
@@ -155,8 +164,12 @@ class Transcription:
     """The compiled NLP of (problem, discretisation); solve it for any parameters p."""
 
     def __init__(self, problem: Problem, disc: Discretization,
-                 ipopt: dict[str, Any] | None = None, jit: bool = False) -> None:
+                 ipopt: dict[str, Any] | None = None, jit: bool = False,
+                 backend: str = DEFAULT_BACKEND) -> None:
         t0 = time.perf_counter()
+        if backend not in BACKENDS:
+            raise ConfigError(f"unknown solver backend {backend!r}; choose one of "
+                              f"{', '.join(BACKENDS)}")
         if problem.cost is None:
             raise ConfigError(f"problem {problem.name!r} has no cost; call minimize()")
         self.problem, self.disc, self.N = problem, disc, disc.N
@@ -185,7 +198,8 @@ class Transcription:
         #: compiled evaluation (:mod:`~ocgroupoid.nlp.jit`): whether on, and whether this
         #: build compiled its library (False: loaded from the cache)
         self.jit, self.jit_compiled = jit, False
-        if jit:
+        self.backend = backend
+        if jit and backend == "ipopt":
             fns["nlp_f"] = ca.Function("nlp_f", [x, p], [fns["f"]], ["x", "p"], ["f"])
             fns["nlp_g"] = ca.Function("nlp_g", [x, p], [fns["g"]], ["x", "p"], ["g"])
             self._options["cache"], self.jit_compiled = compiled(fns)
@@ -196,13 +210,20 @@ class Transcription:
         except RuntimeError as err:
             raise ConfigError(f"IPOPT rejected the options {ipopt}: {err}") from None
         t3 = time.perf_counter()
+        #: the fatrop instance of the same NLP (solver.backend: fatrop), else None
+        self.bounds_function = self._bounds_function()
+        self.fatrop = FatropNLP(self.function_name, self.blocks, self.nx, self.np,
+                                self.bounds_function, {**DEFAULT_IPOPT, **(ipopt or {})}, jit) \
+            if backend == "fatrop" else None
+        if self.fatrop is not None:
+            self.jit_compiled = self.fatrop.jit_compiled
+        t4 = time.perf_counter()
         self.f_fun = ca.Function("f", [x, p], [fns["f"]])
         self.g_fun = ca.Function("g", [x, p], [fns["g"]])
-        self.bounds_function = self._bounds_function()
         self.build_seconds = time.perf_counter() - t0
         #: where the build time went: stage graphs and layout, derivative assembly, IPOPT setup
         self.build_phases = {"stages": t1 - t0, "assembly": t2 - t1, "jit": t_jit - t2,
-                             "nlpsol": t3 - t_jit}
+                             "nlpsol": t3 - t_jit, "fatrop": t4 - t3}
 
     def _final_blocks(self) -> list[Block]:
         pb, G, N, lay, sch = self.problem, self.problem.groupoid, self.N, self.layout, self.scheme
@@ -494,14 +515,23 @@ class Transcription:
 
     def solve(self, guess: Guess, p: np.ndarray | None = None,
               listener: Listener | None = None) -> RawResult:
-        """Run IPOPT from ``guess`` with parameters ``p`` (default: the problem's);
-        ``listener(iteration, objective, infeasibility)`` hears every iteration and stops
-        IPOPT by returning True (status ``User_Requested_Stop``). A guess with multipliers
-        is a primal-dual warm start (:attr:`warm_solver`; no listener)."""
+        """Run the backend from ``guess`` with parameters ``p`` (default: the problem's).
+        With IPOPT, ``listener(iteration, objective, infeasibility)`` hears every iteration
+        and stops IPOPT by returning True (status ``User_Requested_Stop``), and a guess with
+        multipliers is a primal-dual warm start (:attr:`warm_solver`; no listener). fatrop
+        has neither: it starts from the guess's primal point, and when it fails (its Riccati
+        recursion needs every stage's reduced Hessian positive definite, and regularises until
+        it is: slow or stuck on some nonconvex problems) IPOPT solves from the same start."""
         p = self.pack() if p is None else np.asarray(p, dtype=float)
         lbg, ubg, lbx, ubx = self.bounds_function(p)
         warm = self._warm(guess)
         x0 = guess.x if guess.x is not None and guess.x.size == self.nx else self.point(guess, p)
+        first = None
+        if self.fatrop is not None:
+            first = self.fatrop.solve(x0, p)
+            if first.success:
+                return RawResult(guess.label, first.x, p, first.lam_g, first.f, first.status,
+                                 True, first.iterations, first.seconds, first.lam_x, "fatrop")
         solver, duals = self.solver, {}
         if warm:
             solver, duals = self.warm_solver, {"lam_g0": guess.lam_g, "lam_x0": guess.lam_x}
@@ -516,8 +546,25 @@ class Transcription:
         status = str(stats["return_status"])
         iterations = 0 if status == "Not_Enough_Degrees_Of_Freedom" else int(stats["iter_count"])
         return RawResult(guess.label, np.array(r["x"]).ravel(), p, np.array(r["lam_g"]).ravel(),
-                         float(r["f"]), status, bool(stats["success"]), iterations, seconds,
-                         np.array(r["lam_x"]).ravel())
+                         float(r["f"]), status, bool(stats["success"]), iterations,
+                         seconds + (first.seconds if first else 0.0),
+                         np.array(r["lam_x"]).ravel(),
+                         "ipopt after fatrop" if first else "ipopt")
+
+    def solve_graph(self, x0: ca.MX, p: ca.MX, lam_g0: ca.MX | None = None,
+                    lam_x0: ca.MX | None = None) -> dict[str, ca.MX]:
+        """A solve from x0 as a graph (``x, f, g, lam_g, lam_x``) with the bounds of
+        :attr:`bounds_function`: the backend's nlpsol inside, for the exported C solver.
+        With multipliers, IPOPT's primal-dual warm start (:attr:`warm_solver`); fatrop has
+        none and starts from x0."""
+        if self.fatrop is not None:
+            return self.fatrop.graph(x0, p)
+        lbg, ubg, lbx, ubx = self.bounds_function(p)
+        warm = lam_g0 is not None and lam_x0 is not None
+        solver = self.warm_solver if warm else self.solver
+        duals = {"lam_g0": lam_g0, "lam_x0": lam_x0} if warm else {}
+        r = solver(x0=x0, p=p, lbg=lbg, ubg=ubg, lbx=lbx, ubx=ubx, **duals)
+        return {k: r[k] for k in ("x", "f", "g", "lam_g", "lam_x")}
 
     def _warm(self, guess: Guess) -> bool:
         """Whether ``guess`` is a primal-dual point of this NLP (sizes match)."""

@@ -63,7 +63,7 @@ def make_solution(tr: Transcription, r: RawResult, minima: Sequence[Any],
     return Solution(
         problem=pb.name, success=r.success and not failures, status=r.status, N=tr.N, T=T,
         cost=r.cost,
-        iterations=r.iterations, solve_seconds=r.solve_seconds,
+        iterations=r.iterations, solve_seconds=r.solve_seconds, backend=r.backend,
         build_seconds=tr.build_seconds,
         discretization={"scheme": tr.disc.scheme, "retraction": tr.scheme.retraction,
                         "rule": tr.disc.rule, "order": pb.order, "start": r.label,

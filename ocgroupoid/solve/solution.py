@@ -87,6 +87,8 @@ class Solution:
     #: best start's
     starts: int = 1
     ipopt_seconds_total: float = 0.0
+    #: the solver of the best start (``ipopt``, ``fatrop``, ``ipopt after fatrop``)
+    backend: str = "ipopt"
 
     def __repr__(self) -> str:
         return (f"Solution({self.problem!r}, status={self.status!r}, cost={self.cost:.10g}, "
@@ -133,7 +135,8 @@ class Solution:
             "cost": self.cost,
             "stats": {"iterations": self.iterations, "solve_seconds": self.solve_seconds,
                       "build_seconds": self.build_seconds, "starts": self.starts,
-                      "ipopt_seconds_total": self.ipopt_seconds_total},
+                      "ipopt_seconds_total": self.ipopt_seconds_total,
+                      "backend": self.backend},
             "discretization": self.discretization,
             "parameters": self.parameters,
             "controls": {"t": self.controls_t, "u": self.controls, "names": self.control_names,
@@ -175,6 +178,7 @@ class Solution:
             build_seconds=float(d["stats"].get("build_seconds", 0.0)),
             starts=int(d["stats"].get("starts", 1)),
             ipopt_seconds_total=float(d["stats"].get("ipopt_seconds_total", 0.0)),
+            backend=str(d["stats"].get("backend", "ipopt")),
             discretization=d.get("discretization", {}), parameters=d.get("parameters", {}),
             t=arr(states.pop("t")), states={k: np.array(v, dtype=float) for k, v in states.items()},
             velocity_t=arr(vels.pop("t")),

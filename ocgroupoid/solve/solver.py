@@ -18,7 +18,7 @@ import numpy as np
 from ..errors import ConfigError
 from ..model.problem import Problem
 from ..nlp.schemes import DEFAULT_RULE, DEFAULT_SCHEME
-from ..nlp.transcription import Discretization, Guess, RawResult, Transcription
+from ..nlp.transcription import DEFAULT_BACKEND, Discretization, Guess, RawResult, Transcription
 from ..nlp.watch import Listener
 from . import mesh, richardson
 from .guesses import geodesic_guesses, interpolate, model_guesses, perturbed_guesses
@@ -92,13 +92,13 @@ class Solver:
 
     def __init__(self, problem: Problem, N: int, retraction: str = "cayley",
                  rule: str = DEFAULT_RULE, ipopt: dict[str, Any] | None = None,
-                 scheme: str = DEFAULT_SCHEME, steps: str = "uniform", jit: bool = False
-                 ) -> None:
+                 scheme: str = DEFAULT_SCHEME, steps: str = "uniform", jit: bool = False,
+                 backend: str = DEFAULT_BACKEND) -> None:
         self.problem = problem
         self.ipopt = dict(ipopt or {})
-        self.jit = jit
+        self.jit, self.backend = jit, backend
         self.disc = Discretization(N, retraction, rule, scheme, steps)
-        self.transcription = Transcription(problem, self.disc, self.ipopt, jit)
+        self.transcription = Transcription(problem, self.disc, self.ipopt, jit, backend)
         self._coarse: dict[int, Transcription] = {}
         self._phased: dict[tuple[int, ...], Transcription] = {}
 
@@ -107,7 +107,8 @@ class Solver:
             return self.transcription
         if N not in self._coarse:
             disc = replace(self.disc, N=N)
-            self._coarse[N] = Transcription(self.problem, disc, self.ipopt, self.jit)
+            self._coarse[N] = Transcription(self.problem, disc, self.ipopt, self.jit,
+                                            self.backend)
         return self._coarse[N]
 
     def guesses(self, tr: Transcription, p: np.ndarray, multistart: bool | int) -> list[Guess]:
@@ -211,7 +212,7 @@ class Solver:
         progress(f"adaptive steps: phases of {', '.join(map(str, phases))} intervals")
         if phases not in self._phased:
             self._phased[phases] = Transcription(self.problem, replace(self.disc, phases=phases),
-                                                 self.ipopt, self.jit)
+                                                 self.ipopt, self.jit, self.backend)
         phased = self._phased[phases]
         p = phased.pack(params, initial, final, tr.horizon(r.x, r.p))
         result = phased.solve(interpolate(tr, r.x, r.p, self.disc.N), p)
@@ -220,15 +221,19 @@ class Solver:
 
 def compile(problem: Problem, N: int = 64, retraction: str = "cayley", rule: str = DEFAULT_RULE,
             ipopt: dict[str, Any] | None = None, scheme: str = DEFAULT_SCHEME,
-            steps: str = "uniform", jit: bool = False) -> Solver:
+            steps: str = "uniform", jit: bool = False, backend: str = DEFAULT_BACKEND
+            ) -> Solver:
     """Build the NLP of ``problem`` on N intervals once; see :class:`Solver`. ``steps``:
     ``uniform`` (h = T/N) or ``adaptive`` (one step per interval, summing to T); ``jit``:
-    evaluate the NLP's Functions as compiled C (:mod:`~ocgroupoid.nlp.jit`)."""
-    return Solver(problem, N, retraction, rule, ipopt, scheme, steps, jit)
+    evaluate the NLP's Functions as compiled C (:mod:`~ocgroupoid.nlp.jit`); ``backend``:
+    ``ipopt`` or ``fatrop`` (the stage form, :mod:`~ocgroupoid.nlp.fatrop`)."""
+    return Solver(problem, N, retraction, rule, ipopt, scheme, steps, jit, backend)
 
 
 def solve(problem: Problem, N: int = 64, retraction: str = "cayley", rule: str = DEFAULT_RULE,
           ipopt: dict[str, Any] | None = None, scheme: str = DEFAULT_SCHEME,
-          steps: str = "uniform", jit: bool = False, **kwargs: Any) -> Solution:
+          steps: str = "uniform", jit: bool = False, backend: str = DEFAULT_BACKEND,
+          **kwargs: Any) -> Solution:
     """Build and solve in one call; ``kwargs`` go to :meth:`Solver.solve`."""
-    return compile(problem, N, retraction, rule, ipopt, scheme, steps, jit).solve(**kwargs)
+    return compile(problem, N, retraction, rule, ipopt, scheme, steps, jit, backend).solve(
+        **kwargs)

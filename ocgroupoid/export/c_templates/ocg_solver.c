@@ -1,5 +1,5 @@
 /* ocg_solver.c: the C API of ocg_solver.h on top of the CasADi-generated functions
- * (ocg_generated.c) and the model tables (ocg_model.c). The same file serves every export.
+ * (ocg_generated.c, ocg_generated_warm.c) and the model tables (ocg_model.c). The same file serves every export.
  */
 #define _POSIX_C_SOURCE 200809L
 
@@ -9,16 +9,38 @@
 #include <time.h>
 
 #include "ocg_generated.h"
+#include "ocg_generated_warm.h"
 #include "ocg_ipopt_hooks.h"
 #include "ocg_model.h"
 #include "ocg_solver.h"
+#if OCG_BACKEND_FATROP
+#include "ocg_fatrop_hooks.h"
+#endif
 
-/* ------------------------------------------------------------------ IPOPT hooks */
+/* A failed fatrop solve (not an IPOPT status; fatrop's return flag is 1 for every failure). */
+#define OCG_FATROP_FAILED (-1000)
 
+/* ------------------------------------------------------------------ solver hooks */
+
+/* The return status (IPOPT's vocabulary) and iterations of the last solve, whichever backend
+ * ran it. */
 static struct {
   int iterations;
   enum ApplicationReturnStatus status;
-} ocg_ipopt_last;
+} ocg_last;
+
+#if OCG_BACKEND_FATROP
+fatrop_int ocg_fatrop_solve(struct FatropOcpCSolver *solver) {
+  fatrop_int flag = fatrop_ocp_c_solve(solver);
+  const struct FatropOcpCStats *stats = fatrop_ocp_c_get_stats(solver);
+  ocg_last.iterations = stats ? (int)stats->iterations_count : 0;
+  ocg_last.status = flag == 0 ? Solve_Succeeded
+                          : ocg_last.iterations >= OCG_MAX_ITER
+                              ? Maximum_Iterations_Exceeded
+                              : (enum ApplicationReturnStatus)OCG_FATROP_FAILED;
+  return flag;
+}
+#endif
 
 static bool ocg_intermediate(ipindex alg_mod, ipindex iter_count, ipnumber obj_value,
                              ipnumber inf_pr, ipnumber inf_du, ipnumber mu, ipnumber d_norm,
@@ -26,7 +48,7 @@ static bool ocg_intermediate(ipindex alg_mod, ipindex iter_count, ipnumber obj_v
                              ipindex ls_trials, UserDataPtr user_data) {
   (void)alg_mod, (void)obj_value, (void)inf_pr, (void)inf_du, (void)mu, (void)d_norm;
   (void)regularization_size, (void)alpha_du, (void)alpha_pr, (void)ls_trials, (void)user_data;
-  ocg_ipopt_last.iterations = (int)iter_count;
+  ocg_last.iterations = (int)iter_count;
   return true;
 }
 
@@ -47,14 +69,15 @@ enum ApplicationReturnStatus ocg_ipopt_solve(IpoptProblem problem, ipnumber *x, 
                                              ipnumber *obj_val, ipnumber *mult_g,
                                              ipnumber *mult_x_L, ipnumber *mult_x_U,
                                              UserDataPtr user_data) {
-  ocg_ipopt_last.status =
+  ocg_last.status =
       IpoptSolve(problem, x, g, obj_val, mult_g, mult_x_L, mult_x_U, user_data);
-  return ocg_ipopt_last.status;
+  return ocg_last.status;
 }
 
 static const char *ocg_ipopt_status_name(int status) {
   switch (status) {
     case Solve_Succeeded: return "Solve_Succeeded";
+    case OCG_FATROP_FAILED: return "Fatrop_Failed";
     case Solved_To_Acceptable_Level: return "Solved_To_Acceptable_Level";
     case Infeasible_Problem_Detected: return "Infeasible_Problem_Detected";
     case Search_Direction_Becomes_Too_Small: return "Search_Direction_Becomes_Too_Small";
@@ -97,11 +120,12 @@ typedef struct {
    name##_sparsity_out, name##_n_out}
 
 static const ocg_function ocg_f_nlpsol = OCG_FUNCTION(ocg_gen_nlpsol);
+static const ocg_function ocg_f_nlpsol_warm = OCG_FUNCTION(ocg_gen_nlpsol_warm);
 static const ocg_function ocg_f_guess = OCG_FUNCTION(ocg_gen_guess);
 static const ocg_function ocg_f_pack = OCG_FUNCTION(ocg_gen_pack);
 static const ocg_function ocg_f_post = OCG_FUNCTION(ocg_gen_post);
-static const ocg_function *const ocg_functions[] = {&ocg_f_nlpsol, &ocg_f_guess, &ocg_f_pack,
-                                                    &ocg_f_post};
+static const ocg_function *const ocg_functions[] = {&ocg_f_nlpsol, &ocg_f_nlpsol_warm,
+                                                    &ocg_f_guess, &ocg_f_pack, &ocg_f_post};
 #define OCG_N_FUNCTIONS (sizeof ocg_functions / sizeof ocg_functions[0])
 /* ocg_gen_post has OCG_N_POST outputs (ocg_model.h): OCG_X .. OCG_FINAL_MULTIPLIERS, then the
  * control polynomial's breakpoints and coefficients */
@@ -173,6 +197,7 @@ struct ocg_result {
   int solved, status, success, iterations, warm;
   double cost, seconds, residual;
   double p[OCG_NP], x_ipopt[OCG_NX], x_start[OCG_NX], g[OCG_NG + 1], lam_g[OCG_NG + 1];
+  double lam_x[OCG_NX], lam_g_start[OCG_NG + 1], lam_x_start[OCG_NX];
   double *post[OCG_N_POST];
   size_t post_width[OCG_N_POST], post_count[OCG_N_POST]; /* CasADi nrow, ncol */
   ocg_work work;
@@ -188,7 +213,7 @@ size_t ocg_n_values(void) { return OCG_NV; }
 const char *ocg_strerror(int code) {
   switch (code) {
     case OCG_OK: return "solved";
-    case OCG_NOT_SOLVED: return "IPOPT stopped without success (see the status)";
+    case OCG_NOT_SOLVED: return "the solver stopped without success (see the status)";
     case OCG_ERR_NULL: return "a required pointer is NULL";
     case OCG_ERR_LENGTH: return "an array has the wrong number of values";
     case OCG_ERR_NOT_FINITE: return "NaN or Inf in the input";
@@ -196,6 +221,7 @@ const char *ocg_strerror(int code) {
       return "a value is outside its domain (T <= 0, zero quaternion, non-unit direction)";
     case OCG_ERR_MEMORY: return "out of memory";
     case OCG_ERR_EVALUATION: return "a generated function failed";
+    case OCG_ERR_UNSOLVED: return "a warm start from a result that holds no solve";
     default: return "unknown code";
   }
 }
@@ -266,7 +292,10 @@ static double ocg_now(void) {
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-int ocg_solve(const double *p, size_t n_p, const double *x0, size_t n_x0, ocg_result *r) {
+/* The solve of ocg_solve and ocg_solve_warm: from x0 (NULL: the geodesic guess), with
+ * multipliers when dual is set (r->lam_g_start, r->lam_x_start). */
+static int ocg_run(const double *p, size_t n_p, const double *x0, size_t n_x0, int dual,
+                   ocg_result *r) {
   double f = NAN, t0;
   size_t i;
   int code;
@@ -286,21 +315,22 @@ int ocg_solve(const double *p, size_t n_p, const double *x0, size_t n_x0, ocg_re
     code = ocg_call(&ocg_f_guess, in, 1, out, 1, &r->work);
     if (code != OCG_OK) return code;
   }
-  ocg_ipopt_last.iterations = 0;
-  ocg_ipopt_last.status = Internal_Error;
+  ocg_last.iterations = 0;
+  ocg_last.status = Internal_Error;
   t0 = ocg_now();
   {
-    const double *in[] = {r->x_start, r->p};
-    double *out[] = {r->x_ipopt, &f, r->g, r->lam_g};
-    code = ocg_call(&ocg_f_nlpsol, in, 2, out, 4, &r->work);
+    const double *in[] = {r->x_start, r->p, r->lam_g_start, r->lam_x_start};
+    double *out[] = {r->x_ipopt, &f, r->g, r->lam_g, r->lam_x};
+    code = dual ? ocg_call(&ocg_f_nlpsol_warm, in, 4, out, 5, &r->work)
+                : ocg_call(&ocg_f_nlpsol, in, 2, out, 5, &r->work);
   }
   r->seconds = ocg_now() - t0;
   if (code != OCG_OK) return code;
-  r->status = (int)ocg_ipopt_last.status;
+  r->status = (int)ocg_last.status;
   r->success = r->status == Solve_Succeeded || r->status == Solved_To_Acceptable_Level ||
                r->status == Feasible_Point_Found;
   /* as the Python API: IPOPT reports no iterations when it stops before the first */
-  r->iterations = r->status == Not_Enough_Degrees_Of_Freedom ? 0 : ocg_ipopt_last.iterations;
+  r->iterations = r->status == Not_Enough_Degrees_Of_Freedom ? 0 : ocg_last.iterations;
   r->cost = f;
   r->warm = x0 != NULL;
   r->residual = 0.0;
@@ -313,6 +343,21 @@ int ocg_solve(const double *p, size_t n_p, const double *x0, size_t n_x0, ocg_re
   if (code != OCG_OK) return code;
   r->solved = 1;
   return r->success ? OCG_OK : OCG_NOT_SOLVED;
+}
+
+int ocg_solve(const double *p, size_t n_p, const double *x0, size_t n_x0, ocg_result *r) {
+  return ocg_run(p, n_p, x0, n_x0, 0, r);
+}
+
+int ocg_solve_warm(const double *p, size_t n_p, const ocg_result *from, ocg_result *r) {
+  double x[OCG_NX];
+  if (!p || !from || !r) return OCG_ERR_NULL;
+  if (!from->solved) return OCG_ERR_UNSOLVED;
+  if (n_p != OCG_NP) return OCG_ERR_LENGTH; /* checked before r changes */
+  memcpy(x, from->x_ipopt, sizeof x);
+  memmove(r->lam_g_start, from->lam_g, sizeof r->lam_g_start);
+  memmove(r->lam_x_start, from->lam_x, sizeof r->lam_x_start);
+  return ocg_run(p, n_p, x, OCG_NX, 1, r);
 }
 
 int ocg_status(const ocg_result *r) { return r && r->solved ? r->status : Internal_Error; }
@@ -338,6 +383,8 @@ const double *ocg_output(const ocg_result *r, enum ocg_output which, size_t *row
       n_rows = 1, n_cols = OCG_NP, data = r->p;
     } else if (which == OCG_LAM_G) {
       n_rows = 1, n_cols = OCG_NG, data = r->lam_g;
+    } else if (which == OCG_LAM_X) {
+      n_rows = 1, n_cols = OCG_NX, data = r->lam_x;
     }
   }
   if (rows) *rows = data ? n_rows : 0;
@@ -458,6 +505,8 @@ int ocg_write_json(const ocg_result *r, FILE *out) {
   ocg_json_number(out, r->cost);
   fprintf(out, ",\n \"stats\": {\"iterations\": %d, \"solve_seconds\": ", r->iterations);
   ocg_json_number(out, r->seconds);
+  fputs(", \"backend\": ", out);
+  ocg_json_string(out, OCG_BACKEND);
   fputs("},\n \"discretization\": {\"scheme\": ", out);
   ocg_json_string(out, OCG_SCHEME);
   fputs(", \"retraction\": ", out);

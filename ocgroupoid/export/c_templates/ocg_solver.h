@@ -1,4 +1,4 @@
-/* ocg_solver.h: the C API of a problem exported by ocgroupoid (API version 2).
+/* ocg_solver.h: the C API of a problem exported by ocgroupoid (API version 3).
  *
  * One export solves every instance of its model: the instance is the parameter vector p
  * = [physical parameters | initial pack | V0 | final pack | VN | T] of the compiled NLP.
@@ -28,7 +28,8 @@
 extern "C" {
 #endif
 
-#define OCG_API_VERSION 2 /* 2: the control polynomial (OCG_CONTROL_BREAKS, ...) */
+#define OCG_API_VERSION 3 /* 2: the control polynomial (OCG_CONTROL_BREAKS, ...);
+                             3: primal-dual warm starts (ocg_solve_warm, OCG_LAM_X) */
 
 /* Return codes. */
 enum ocg_code {
@@ -41,7 +42,8 @@ enum ocg_code {
   OCG_ERR_NOT_FINITE = -3, /* NaN or Inf in the input */
   OCG_ERR_DOMAIN = -4,     /* T <= 0, a zero quaternion, a direction that is not unit length */
   OCG_ERR_MEMORY = -5,     /* out of memory */
-  OCG_ERR_EVALUATION = -6  /* a generated function failed (e.g. its memory is in use) */
+  OCG_ERR_EVALUATION = -6, /* a generated function failed (e.g. its memory is in use) */
+  OCG_ERR_UNSOLVED = -7    /* a warm start from a result that holds no solve */
 };
 
 /* What ocg_output() reads from a result: rows x cols, row-major, one row per time. */
@@ -60,9 +62,10 @@ enum ocg_output {
   OCG_P = 11,             /* 1 x n_p: the parameters solved for */
   OCG_LAM_G = 12,         /* 1 x n_g: all constraint multipliers as IPOPT returned them */
   OCG_CONTROL_BREAKS = 13, /* pieces+1 x 1: breakpoints of the control polynomial */
-  OCG_CONTROL_COEFFICIENTS = 14 /* pieces x (k n_u): per piece, coefficient i of control j
-                                   at column i n_u + j, powers of t - breakpoint from k-1
-                                   down to 0 (scipy.interpolate.PPoly's order) */
+  OCG_CONTROL_COEFFICIENTS = 14, /* pieces x (k n_u): per piece, coefficient i of control j
+                                    at column i n_u + j, powers of t - breakpoint from k-1
+                                    down to 0 (scipy.interpolate.PPoly's order) */
+  OCG_LAM_X = 15          /* 1 x n_x: the multipliers of the variable bounds */
 };
 
 typedef struct ocg_result ocg_result;
@@ -88,6 +91,13 @@ void ocg_result_free(ocg_result *r);
  * x0 (length ocg_n_x(), e.g. OCG_X of an earlier result) is the starting point. Returns
  * OCG_OK, OCG_NOT_SOLVED, or a negative code (the result is then left unchanged). */
 int ocg_solve(const double *p, size_t n_p, const double *x0, size_t n_x0, ocg_result *r);
+
+/* Solve the instance p from the primal-dual point of an earlier result `from` (its solver's
+ * point and multipliers; from may be r): IPOPT's warm start (warm_start_init_point, small
+ * bound pushes, mu_init 1e-6), a few iterations when p is near from's. An export with
+ * solver.backend fatrop, which has no dual warm start, starts from the primal point only.
+ * Returns as ocg_solve, and OCG_ERR_UNSOLVED when from holds no solve. */
+int ocg_solve_warm(const double *p, size_t n_p, const ocg_result *from, ocg_result *r);
 
 int ocg_status(const ocg_result *r);              /* IPOPT ApplicationReturnStatus */
 const char *ocg_status_name(const ocg_result *r); /* e.g. "Solve_Succeeded"; "" if unsolved */

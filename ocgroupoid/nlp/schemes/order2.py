@@ -116,7 +116,8 @@ class IntervalVelocities(Scheme):
         return Block("recon", fun, columns(self.states[:, :N], self.xi, self.states[:, 1:],
                                            lay.T, ncols=N), 1, Kind.RECONSTRUCTION,
                      rows=[f"reconstruction {c}" for c in comps],
-                     columns=[f"interval {k}" for k in range(N)])
+                     columns=[f"interval {k}" for k in range(N)],
+                     next=slice(ds + dg, 2 * ds + dg))
 
     def readout_steps(self, pick: Pick) -> ca.MX:
         assert self.layout is not None

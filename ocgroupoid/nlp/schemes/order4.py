@@ -227,7 +227,8 @@ class QuadraticGauss(Scheme):
         steps = lay.steps[None, :]
         blocks = [Block("recon", recon, columns(*cols, self.states[:, 1:], steps, ncols=N), 1,
                         Kind.RECONSTRUCTION, rows=[f"reconstruction {c}" for c in comps],
-                        columns=[f"interval {k}" for k in range(N)])]
+                        columns=[f"interval {k}" for k in range(N)],
+                        next=slice(ds + 3 * dg, 2 * ds + 3 * dg))]
         return blocks + gauss_blocks(self, [ds, dg, dg, dg, 1, npar],
                                      columns(*cols, steps, lay.P, ncols=N), "Gauss point")
 
@@ -357,7 +358,8 @@ class GaussStages(Scheme):
         blocks = [Block("recon", recon, columns(self.states[:, :N], self.eta, self.states[:, 1:],
                                                 steps, ncols=N), 1, Kind.RECONSTRUCTION,
                         rows=[f"reconstruction {c}" for c in comps],
-                        columns=[f"interval {k}" for k in range(N)])]
+                        columns=[f"interval {k}" for k in range(N)],
+                        next=slice(ds + 2 * dg, 2 * ds + 2 * dg))]
         return blocks + gauss_blocks(self, [ds, 2 * dg, 1, npar], columns(
             self.states[:, :N], self.eta, steps, lay.P, ncols=N), "stage",
             split=lambda s, e, T, P: (s, e[:dg], e[dg:], T, P))

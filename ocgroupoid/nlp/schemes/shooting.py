@@ -195,7 +195,8 @@ class RK4Shooting(Scheme):
                 columns(X_idx, self.U[:, ks], self._X([k + 1 for k in ks]), lay.T,
                         lay.P, ncols=n), 1 + npar, Kind.RECONSTRUCTION,
                 rows=[f"continuity {c}" for c in labels],
-                columns=[f"interval {k}" for k in ks]))
+                columns=[f"interval {k}" for k in ks],
+                next=slice(n_in + self.nu, n_in + self.nu + nX)))
             names = [n_ for n_, c in self.extra for _ in range(c.numel())]
             for kind, rows, bounds, there in (
                     (Kind.PATH, names, None, bool(self.extra)),
