@@ -95,19 +95,34 @@ def _gather(v: ca.MX, idx: np.ndarray) -> ca.MX:
     return ca.reshape(flat, idx.shape[0], idx.shape[1]) if idx.ndim == 2 else flat
 
 
+#: targets that more sources than this add into (an entry every stage touches, such as the
+#: Hessian of a free horizon T) are summed by a sparse product instead of the padded gather
+DENSE_ROW = 16
+
+
 def _sum_into(src: ca.MX, source: np.ndarray, target: np.ndarray, n_target: int) -> ca.MX:
     """``out[t] = sum of src[source[i]] over i with target[i] = t``: one gather, one row sum.
 
     Sources are grouped by target; groups are padded to the largest multiplicity with an
-    index pointing at an appended zero.
+    index pointing at an appended zero. Targets with more than :data:`DENSE_ROW` sources (a
+    padding as wide as N for every target: quadratic in N) are summed by one product with a
+    constant sparse 0/1 matrix instead.
     """
-    order = np.argsort(target, kind="stable")
     counts = np.bincount(target, minlength=n_target)
-    start = np.concatenate([[0], np.cumsum(counts)[:-1]])
-    slot = np.arange(target.size) - np.repeat(start, counts)
-    G = np.full((n_target, max(int(counts.max(initial=1)), 1)), src.numel())
-    G[target[order], slot] = source[order]
-    return ca.sum2(_gather(ca.vertcat(src, ca.MX(1, 1)), G))
+    heavy = counts[target] > DENSE_ROW
+    light_source, light_target = source[~heavy], target[~heavy]
+    order = np.argsort(light_target, kind="stable")
+    light = np.bincount(light_target, minlength=n_target)
+    start = np.concatenate([[0], np.cumsum(light)[:-1]])
+    slot = np.arange(light_target.size) - np.repeat(start, light)
+    G = np.full((n_target, max(int(light.max(initial=1)), 1)), src.numel())
+    G[light_target[order], slot] = light_source[order]
+    out = ca.sum2(_gather(ca.vertcat(src, ca.MX(1, 1)), G))
+    if heavy.any():
+        S = ca.DM(ca.Sparsity.triplet(n_target, src.numel(), target[heavy].tolist(),
+                                      source[heavy].tolist()), 1.0)
+        out = out + ca.mtimes(S, src)
+    return out
 
 
 def _sparsity(rows: np.ndarray, cols: np.ndarray, shape: tuple[int, int]

@@ -124,31 +124,34 @@ class FatropNLP:
             raise ConfigError(f"fatrop rejected the NLP or its options: {err}; use "
                               "solver.backend: ipopt") from None
 
-    def solve(self, x0: np.ndarray, p: np.ndarray) -> FatropResult:
-        """Run fatrop from the original point x0 (every copy starts at its variable)."""
+    def arguments(self, x0: Any, p: Any) -> dict[str, Any]:
+        """The solver's inputs in stage form, for an original point x0 and parameters p (numbers,
+        or graphs for the exported solver; every copy starts at its variable)."""
         sf = self.form
-        lbg, ubg, lbx, ubx = (np.array(v).ravel() for v in self.bounds(p))
+        lbg, ubg, lbx, ubx = self.bounds(p)
         lbz, ubz = sf.bounds_z(lbx, ubx)
+        return {"x0": sf.z_of(x0), "p": p, "lbg": sf.rows_z(lbg), "ubg": sf.rows_z(ubg),
+                "lbx": lbz, "ubx": ubz}
+
+    def solve(self, x0: np.ndarray, p: np.ndarray) -> FatropResult:
+        """Run fatrop from the original point x0."""
+        sf = self.form
+        arguments = self.arguments(x0, p)
         t0 = time.perf_counter()
-        r = self.solver(x0=sf.z_of(x0), p=p, lbg=sf.rows_z(lbg), ubg=sf.rows_z(ubg),
-                        lbx=lbz, ubx=ubz)
+        r = self.solver(**arguments)
         seconds = time.perf_counter() - t0
         stats = self.solver.stats()
         success, iterations = bool(stats["success"]), int(stats["iter_count"])
         status = "Solve_Succeeded" if success else \
             "Maximum_Iterations_Exceeded" if iterations >= self.max_iter else FAILED
-        z = np.array(r["x"]).ravel()
-        return FatropResult(z[sf.z_slot], float(r["f"]), sf.rows_x(np.array(r["g"])),
-                            sf.rows_x(np.array(r["lam_g"])), sf.lam_x(np.array(r["lam_x"])),
+        return FatropResult(sf.x_of(np.array(r["x"])), float(r["f"]), sf.rows_x(np.array(r["g"])),
+                            sf.rows_x(np.array(r["lam_g"])), sf.x_of(np.array(r["lam_x"])),
                             status, success, iterations, seconds)
 
     def graph(self, x0: ca.MX, p: ca.MX) -> dict[str, ca.MX]:
         """The same solve as a graph in the original variables (the exported solver):
         ``x, f, g, lam_g, lam_x``."""
         sf = self.form
-        lbg, ubg, lbx, ubx = self.bounds(p)
-        lbz, ubz = sf.bounds_graph(lbx, ubx)
-        r = self.solver(x0=sf.z_graph(x0), p=p, lbg=sf.rows_z_graph(lbg),
-                        ubg=sf.rows_z_graph(ubg), lbx=lbz, ubx=ubz)
-        return {"x": r["x"][sf.z_slot.tolist()], "f": r["f"], "g": sf.rows_x_graph(r["g"]),
-                "lam_g": sf.rows_x_graph(r["lam_g"]), "lam_x": r["lam_x"][sf.z_slot.tolist()]}
+        r = self.solver(**self.arguments(x0, p))
+        return {"x": sf.x_of(r["x"]), "f": r["f"], "g": sf.rows_x(r["g"]),
+                "lam_g": sf.rows_x(r["lam_g"]), "lam_x": sf.x_of(r["lam_x"])}

@@ -22,6 +22,7 @@ signs, so multipliers map by a permutation).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TypeVar
 
 import casadi as ca
 import numpy as np
@@ -72,49 +73,48 @@ class StageForm:
         r[self.order] = np.arange(self.order.size)
         return r
 
-    # -- numeric maps ---------------------------------------------------------------------
+    # -- maps between the two points (numbers, or graphs for the exported solver) -------------
 
-    def z_of(self, x: np.ndarray) -> np.ndarray:
+    def z_of(self, x: Values) -> Values:
         """The stage-form point of an original point (copies hold their variable's value)."""
-        return np.asarray(x, dtype=float)[self.source]
+        return _pick(x, self.source)
 
-    def bounds_z(self, lbx: np.ndarray, ubx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def bounds_z(self, lbx: Values, ubx: Values) -> tuple[Values, Values]:
         """Variable bounds on the own slots; copies are free (their gap rows tie them)."""
-        lo, up = np.full(self.nz, -np.inf), np.full(self.nz, np.inf)
-        lo[self.z_slot], up[self.z_slot] = np.ravel(lbx), np.ravel(ubx)
-        return lo, up
-
-    def rows_z(self, g: np.ndarray) -> np.ndarray:
-        """Original row values (bounds, multipliers) in stage-form order; copy rows zero."""
-        return np.concatenate([np.ravel(g), np.zeros(self.order.size - self.n_rows)])[
-            self.order]
-
-    def rows_x(self, g: np.ndarray) -> np.ndarray:
-        """Stage-form row values back in the original order (copy rows dropped)."""
-        return np.asarray(g, dtype=float).ravel()[self.rank[:self.n_rows]]
-
-    def lam_x(self, lam_z: np.ndarray) -> np.ndarray:
-        """Bound multipliers of the original variables (those of their own slots)."""
-        return np.asarray(lam_z, dtype=float).ravel()[self.z_slot]
-
-    # -- symbolic maps (the exported solver) --------------------------------------------------
-
-    def z_graph(self, x: ca.MX) -> ca.MX:
-        return x[self.source.tolist()]
-
-    def bounds_graph(self, lbx: ca.MX, ubx: ca.MX) -> tuple[ca.MX, ca.MX]:
         own = self.own
-        pad = np.where(own, 0, self.z_slot.size)
-        pick = np.zeros(self.nz, dtype=np.int64)
-        pick[self.z_slot] = np.arange(self.z_slot.size)
-        index = np.where(own, pick, pad).tolist()
-        return (ca.vertcat(lbx, -np.inf)[index], ca.vertcat(ubx, np.inf)[index])
+        slot_of = np.zeros(self.nz, dtype=np.int64)
+        slot_of[self.z_slot] = np.arange(self.z_slot.size)
+        index = np.where(own, slot_of, self.z_slot.size)  # copies: the appended infinity
+        return (_pick(_append(lbx, 1, -np.inf), index), _pick(_append(ubx, 1, np.inf), index))
 
-    def rows_z_graph(self, g: ca.MX) -> ca.MX:
-        return ca.vertcat(g, ca.MX.zeros(self.order.size - self.n_rows))[self.order.tolist()]
+    def rows_z(self, g: Values) -> Values:
+        """Original row values (bounds, multipliers) in stage-form order; copy rows zero."""
+        return _pick(_append(g, self.order.size - self.n_rows, 0.0), self.order)
 
-    def rows_x_graph(self, g: ca.MX) -> ca.MX:
-        return g[self.rank[:self.n_rows].tolist()]
+    def rows_x(self, g: Values) -> Values:
+        """Stage-form row values back in the original order (copy rows dropped)."""
+        return _pick(g, self.rank[:self.n_rows])
+
+    def x_of(self, z: Values) -> Values:
+        """The original point (or bound multipliers) of a stage-form one: the own slots."""
+        return _pick(z, self.z_slot)
+
+
+Values = TypeVar("Values", np.ndarray, ca.MX)
+
+
+def _pick(v: Values, index: np.ndarray) -> Values:
+    """``v[index]`` of a vector of numbers or a graph."""
+    if isinstance(v, ca.MX):
+        return v[index.tolist()]
+    return np.asarray(v, dtype=float).ravel()[index]
+
+
+def _append(v: Values, n: int, value: float) -> Values:
+    """``v`` followed by n copies of ``value``."""
+    if isinstance(v, ca.MX):
+        return ca.vertcat(v, ca.MX(ca.DM.ones(n) * value))
+    return np.concatenate([np.asarray(v, dtype=float).ravel(), np.full(n, value)])
 
 
 def _next_rows(b: Block) -> np.ndarray:
