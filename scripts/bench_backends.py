@@ -108,7 +108,8 @@ def chart(rows: list[dict[str, Any]], out: Path) -> None:
     for ax in axes.ravel()[len(names):]:
         ax.set_visible(False)
     fig.suptitle("solver.backend and solver.jit: wall time per solve (median), one start; "
-                 "converged solves only (solid order2, dotted order4)")
+                 "converged solves only (solid order2, dotted order4)\na fatrop time includes "
+                 "IPOPT's re-solve where fatrop failed (cart_pole)", fontsize=10)
     fig.tight_layout()
     fig.savefig(out / "bench_backends.png", dpi=100)
     plt.close(fig)
