@@ -173,3 +173,20 @@ def test_jit_compiled_fatrop_equals_the_virtual_machine(tmp_path: Path, monkeypa
     assert a.success and b.success and a.iterations == b.iterations
     assert abs(a.cost - b.cost) <= 1e-10 * abs(a.cost)
     np.testing.assert_allclose(b.x, a.x, rtol=0, atol=1e-10)
+
+
+def test_fatrop_reads_the_ipopt_options_it_shares() -> None:
+    """tol and max_iter pass through, constr_mult_init_max (zero initial multipliers, our
+    default) becomes fatrop's lam_max, and IPOPT-only options stay with IPOPT; with zero
+    initial multipliers fatrop needs no more iterations than IPOPT on the so3 slew."""
+    cfg = files.load(ROOT / "problems" / "so3_rest_to_rest.yaml")
+    pb = files.build(cfg)
+    tr = compile_problem(pb, 32, ipopt={"tol": 1e-9, "max_iter": 77, "linear_solver": "mumps"},
+                         backend="fatrop").transcription
+    opts = tr.fatrop.options["fatrop"]
+    assert (opts["tol"], opts["max_iter"], opts["lam_max"]) == (1e-9, 77, 0.0)
+    assert "linear_solver" not in opts
+    ipopt = transcription("so3_rest_to_rest", "order2", N=32)
+    p = tr.pack()
+    guess = tr.guesses(p)[0]
+    assert tr.solve(guess, p).iterations <= ipopt.solve(guess, p).iterations
