@@ -11,13 +11,13 @@ bottom of the cost panel is below the reference's own uncertainty.
 from __future__ import annotations
 
 import io
-import re
 import textwrap
 from pathlib import Path
 from typing import Any
 
 from ..solve.solution import write_atomic
 from .equal_accuracy import lines
+from .methods import Method
 
 #: method label -> (colour, line style, marker); ours solid, the baselines dashed
 STYLES = {"order2": ("tab:blue", "-", "o"), "order4": ("tab:green", "-", "s"),
@@ -42,8 +42,7 @@ VARIANT_MARKERS = {"+jit": "D", "@fatrop": "v", "@fatrop+jit": "*"}
 def style(method: str, i: int) -> tuple[str, str, str, str]:
     """Colour, line style, marker and legend name of a method's line (``i``: its place,
     for a method without a style of its own)."""
-    base = re.split("[@+]", method)[0]
-    variant = method[len(base):]
+    base, variant = Method.split(method)
     color, ls, marker = STYLES.get(base, (f"C{i}", "-", "o"))
     name = NAMES.get(base, base)
     if variant:

@@ -11,10 +11,11 @@ and one of ours reaches (a lower bound where ours is bounded).
 from __future__ import annotations
 
 import math
-import re
 from typing import Any
 
 import numpy as np
+
+from .methods import Method
 
 OURS = ("order2", "order4")  # schemes (any retraction) counted as ours
 
@@ -69,7 +70,8 @@ def compare(lines: dict[str, list[dict[str, Any]]], key: str, baseline: str = "r
         return []
     out = []
     base = lines[baseline]
-    ours = {m: rows for m, rows in lines.items() if re.split("[:@+]", m)[0] in OURS}
+    ours = {m: rows for m, rows in lines.items()
+            if Method.split(m)[0].split(":")[0] in OURS}
     ranges = [r for r in (error_range(rows, key) for rows in [base, *ours.values()]) if r]
     if len(ranges) < 2:
         return []

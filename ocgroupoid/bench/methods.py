@@ -9,6 +9,7 @@ backend (``solver.backend``) defaults to ipopt, and ``+jit`` compiles the evalua
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, replace
 
 from ..errors import ConfigError
@@ -41,6 +42,12 @@ class Method:
             f"{self.scheme}:{self.retraction}"
         return name + ("" if self.backend == DEFAULT_BACKEND else f"@{self.backend}") + \
             ("+jit" if self.jit else "")
+
+    @staticmethod
+    def split(label: str) -> tuple[str, str]:
+        """A label's ``SCHEME[:RETRACTION]`` and the rest (``@fatrop+jit``, or "")."""
+        head = re.split("[@+]", label)[0]
+        return head, label[len(head):]
 
     def rule(self, file_rule: str) -> str:
         """The problem file's rule applies to order2; every other scheme has only the

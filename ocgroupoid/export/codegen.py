@@ -126,25 +126,18 @@ def pack_function(tr: Transcription) -> ca.Function:
     return ca.Function("ocg_gen_pack", [v], [p, bad], ["values"], ["p", "bad"])
 
 
-def nlpsol_function(tr: Transcription) -> ca.Function:
+def solver_function(tr: Transcription, warm: bool = False) -> ca.Function:
     """``ocg_gen_nlpsol(x0, p) -> (x, f, g, lam_g, lam_x)``: the Transcription's solver
     (:meth:`Transcription.solve_graph`) with the bounds of
     :attr:`Transcription.bounds_function`, computed from p (a bound given by a parameter is a
-    runtime input of the exported solver)."""
-    x0, p = ca.MX.sym("x0", tr.nx), ca.MX.sym("p", tr.np)
-    r = tr.solve_graph(x0, p)
-    return ca.Function("ocg_gen_nlpsol", [x0, p], [r[k] for k in SOLVE_OUTPUTS],
-                       ["x0", "p"], list(SOLVE_OUTPUTS))
-
-
-def warm_function(tr: Transcription) -> ca.Function:
-    """``ocg_gen_nlpsol_warm(x0, p, lam_g0, lam_x0) -> (x, f, g, lam_g, lam_x)``: the
-    primal-dual warm start of :meth:`Transcription.solve_graph` (fatrop: the primal point)."""
-    x0, p = ca.MX.sym("x0", tr.nx), ca.MX.sym("p", tr.np)
-    lam_g0, lam_x0 = ca.MX.sym("lam_g0", tr.ng), ca.MX.sym("lam_x0", tr.nx)
-    r = tr.solve_graph(x0, p, lam_g0, lam_x0)
-    return ca.Function("ocg_gen_nlpsol_warm", [x0, p, lam_g0, lam_x0],
-                       [r[k] for k in SOLVE_OUTPUTS], ["x0", "p", "lam_g0", "lam_x0"],
+    runtime input of the exported solver); with ``warm``, ``ocg_gen_nlpsol_warm(x0, p, lam_g0,
+    lam_x0)``, its primal-dual warm start (fatrop: the primal point)."""
+    ins = [ca.MX.sym("x0", tr.nx), ca.MX.sym("p", tr.np)]
+    if warm:
+        ins += [ca.MX.sym("lam_g0", tr.ng), ca.MX.sym("lam_x0", tr.nx)]
+    r = tr.solve_graph(*ins)
+    return ca.Function("ocg_gen_nlpsol_warm" if warm else "ocg_gen_nlpsol", ins,
+                       [r[k] for k in SOLVE_OUTPUTS], [v.name() for v in ins],
                        list(SOLVE_OUTPUTS))
 
 
@@ -361,9 +354,9 @@ def _generate(tr: Transcription) -> dict[str, str]:
     folder."""
     prelude = GENERATED_PRELUDE + (FATROP_PRELUDE if tr.fatrop is not None else "")
     out = {}
-    for name, fns in ((GENERATED, (nlpsol_function(tr), guess_function(tr), pack_function(tr),
+    for name, fns in ((GENERATED, (solver_function(tr), guess_function(tr), pack_function(tr),
                                    post_function(tr))),
-                      (f"{GENERATED}_warm", (warm_function(tr),))):
+                      (f"{GENERATED}_warm", (solver_function(tr, warm=True),))):
         cg = ca.CodeGenerator(name, {"with_header": True})
         for fn in fns:
             cg.add(fn)

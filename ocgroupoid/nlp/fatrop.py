@@ -66,7 +66,6 @@ class FatropResult:
 
     x: np.ndarray
     f: float
-    g: np.ndarray
     lam_g: np.ndarray
     lam_x: np.ndarray
     status: str
@@ -150,7 +149,7 @@ class FatropNLP:
         success, iterations = bool(stats["success"]), int(stats["iter_count"])
         status = "Solve_Succeeded" if success else \
             "Maximum_Iterations_Exceeded" if iterations >= self.max_iter else FAILED
-        return FatropResult(sf.x_of(np.array(r["x"])), float(r["f"]), sf.rows_x(np.array(r["g"])),
+        return FatropResult(sf.x_of(np.array(r["x"])), float(r["f"]),
                             sf.rows_x(np.array(r["lam_g"])), sf.x_of(np.array(r["lam_x"])),
                             status, success, iterations, seconds)
 

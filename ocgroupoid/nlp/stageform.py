@@ -22,6 +22,7 @@ signs, so multipliers map by a permutation).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from typing import TypeVar
 
 import casadi as ca
@@ -59,14 +60,15 @@ class StageForm:
     def K(self) -> int:
         return len(self.nx) - 1
 
-    @property
-    def own(self) -> np.ndarray:
-        """Whether z_j is a variable's own slot (False: a carried copy)."""
-        mine = np.zeros(self.nz, dtype=bool)
-        mine[self.z_slot] = True
-        return mine
+    @cached_property
+    def bound_index(self) -> np.ndarray:
+        """For every z_j, the original variable whose bounds it takes; copies point one past
+        the end (an appended free bound)."""
+        index = np.full(self.nz, self.z_slot.size)
+        index[self.z_slot] = np.arange(self.z_slot.size)
+        return index
 
-    @property
+    @cached_property
     def rank(self) -> np.ndarray:
         """Stage-form row of each assembled row (the inverse of :attr:`order`)."""
         r = np.empty_like(self.order)
@@ -81,10 +83,7 @@ class StageForm:
 
     def bounds_z(self, lbx: Values, ubx: Values) -> tuple[Values, Values]:
         """Variable bounds on the own slots; copies are free (their gap rows tie them)."""
-        own = self.own
-        slot_of = np.zeros(self.nz, dtype=np.int64)
-        slot_of[self.z_slot] = np.arange(self.z_slot.size)
-        index = np.where(own, slot_of, self.z_slot.size)  # copies: the appended infinity
+        index = self.bound_index
         return (_pick(_append(lbx, 1, -np.inf), index), _pick(_append(ubx, 1, np.inf), index))
 
     def rows_z(self, g: Values) -> Values:
@@ -123,6 +122,11 @@ def _next_rows(b: Block) -> np.ndarray:
     return rows[b.next] if b.next is not None else rows[:0]
 
 
+def _read_rows(b: Block) -> np.ndarray:
+    """The stage inputs of a block that it reads (all but the next stage's state)."""
+    return np.setdiff1d(np.arange(b.idx.shape[0]), _next_rows(b))
+
+
 def _dynamics_stages(blocks: list[Block], nx: int) -> tuple[np.ndarray, list[np.ndarray]]:
     """The stage each gap row puts its variable in (``x_{k+1}``; -1: no gap defines it), and
     the stage of every column of every dynamics block (-1 elsewhere): a column is at the
@@ -133,7 +137,7 @@ def _dynamics_stages(blocks: list[Block], nx: int) -> tuple[np.ndarray, list[np.
         nxt = _next_rows(b)
         if not nxt.size:
             continue
-        rest = np.setdiff1d(np.arange(b.idx.shape[0]), nxt)
+        rest = _read_rows(b)
         for c in range(b.ncols):
             reads = b.idx[rest, c]
             reads = reads[reads < nx]
@@ -158,11 +162,9 @@ def stage_form(blocks: list[Block], nx: int) -> StageForm:
     # home stage: a state's own; else the first dynamics column reading it ...
     big = np.iinfo(np.int64).max
     home = np.where(is_state, state, big)
-    reads = []  # per block: the index rows that are read (not next states)
-    for b, stages in zip(blocks, col_stage):
-        rest = np.setdiff1d(np.arange(b.idx.shape[0]), _next_rows(b))
-        reads.append(rest)
-        if _next_rows(b).size:
+    reads = [_read_rows(b) for b in blocks]
+    for b, rest, stages in zip(blocks, reads, col_stage):
+        if b.next is not None:
             vs = b.idx[rest]
             cols = np.broadcast_to(stages, vs.shape)
             inside = (vs < nx) & ~is_state[np.minimum(vs, nx - 1)]
@@ -206,9 +208,9 @@ def stage_form(blocks: list[Block], nx: int) -> StageForm:
     n_rows = int(row_start[-1])
     # z: per stage, the gap-defined states (in gap-row order), the copies, the controls
     copies = np.maximum(need - home, 0)
+    first_copy = np.concatenate([[0], np.cumsum(copies)[:-1]])  # of variable v, by stage
     copy_var = np.repeat(np.arange(nx), copies)
-    copy_stage = np.concatenate([np.arange(h + 1, n + 1) for h, n in zip(home, need)
-                                 if n > h] or [np.zeros(0, dtype=np.int64)])
+    copy_stage = home[copy_var] + 1 + np.arange(copy_var.size) - first_copy[copy_var]
     controls = np.flatnonzero(~is_state)
     stage_z = np.concatenate([state[gap_var_a], copy_stage, home[controls]])
     kind_z = np.concatenate([np.zeros(gap_var_a.size), np.ones(copy_var.size),
@@ -222,7 +224,6 @@ def stage_form(blocks: list[Block], nx: int) -> StageForm:
     z_slot = np.empty(nx, dtype=np.int64)
     z_slot[gap_var_a] = position[:n_gap]
     z_slot[controls] = position[n_gap + n_copy:]
-    first_copy = np.concatenate([[0], np.cumsum(copies)[:-1]])  # of variable v, by stage
     copy_slot = position[n_gap:n_gap + n_copy]
     padded = np.concatenate([copy_slot, [-1]])  # (np.where evaluates both branches)
 

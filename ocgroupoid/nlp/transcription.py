@@ -210,12 +210,12 @@ class Transcription:
         except RuntimeError as err:
             raise ConfigError(f"IPOPT rejected the options {ipopt}: {err}") from None
         t3 = time.perf_counter()
-        #: the fatrop instance of the same NLP (solver.backend: fatrop), else None
         self.bounds_function = self._bounds_function()
+        #: the fatrop instance of the same NLP (solver.backend: fatrop), else None
         self.fatrop = FatropNLP(self.function_name, self.blocks, self.nx, self.np,
                                 self.bounds_function, {**DEFAULT_IPOPT, **(ipopt or {})}, jit) \
             if backend == "fatrop" else None
-        if self.fatrop is not None:
+        if self.fatrop is not None:  # compiled evaluation is the backend's
             self.jit_compiled = self.fatrop.jit_compiled
         t4 = time.perf_counter()
         self.f_fun = ca.Function("f", [x, p], [fns["f"]])
@@ -523,8 +523,6 @@ class Transcription:
         recursion needs every stage's reduced Hessian positive definite, and regularises until
         it is: slow or stuck on some nonconvex problems) IPOPT solves from the same start."""
         p = self.pack() if p is None else np.asarray(p, dtype=float)
-        lbg, ubg, lbx, ubx = self.bounds_function(p)
-        warm = self._warm(guess)
         x0 = guess.x if guess.x is not None and guess.x.size == self.nx else self.point(guess, p)
         first = None
         if self.fatrop is not None:
@@ -532,6 +530,8 @@ class Transcription:
             if first.success:
                 return RawResult(guess.label, first.x, p, first.lam_g, first.f, first.status,
                                  True, first.iterations, first.seconds, first.lam_x, "fatrop")
+        lbg, ubg, lbx, ubx = self.bounds_function(p)
+        warm = self._warm(guess)
         solver, duals = self.solver, {}
         if warm:
             solver, duals = self.warm_solver, {"lam_g0": guess.lam_g, "lam_x0": guess.lam_x}
