@@ -1,6 +1,7 @@
 """The ``bounds:`` section of a problem file: names mapped to ``[lower, upper]``.
 
-A name is a control (``u1``), ``u`` for all the controls, a velocity (``Omega``, ``dtheta``)
+A name is a control (``u1``, ``f``), a control of its own with all its components
+(``tau``), ``u`` for all the controls, a velocity (``Omega``, ``dtheta``)
 or the state of an R^n factor (``theta``, ``xy``). A value is one pair for every component,
 ``[-1, 1]``, or one pair per component, ``[[-1, 1], [null, 2]]``; ``null`` leaves a side open.
 A side may be an expression of the parameters, ``[-umax, umax]`` with ``umax`` in
@@ -26,6 +27,8 @@ def expression(pb: Problem, name: str) -> ca.SX:
     controls = dict(pb.controls)
     if name in controls:
         return controls[name]
+    if name in pb.inputs:  # a control of its own, all its components (tau)
+        return pb.inputs[name]
     if name == "u" and controls:
         return ca.vertcat(*controls.values())
     G = pb.groupoid
@@ -38,7 +41,8 @@ def expression(pb: Problem, name: str) -> ca.SX:
                               "bound; write a path inequality (custom model: definition.path) "
                               "such as a keep-out cone instead")
         return pb.state(name)
-    known = [*controls, *(["u"] if controls else []), *G.velocity_names,
+    known = [*controls, *[n for n in pb.inputs if n not in controls],
+             *(["u"] if controls else []), *G.velocity_names,
              *[f.state for f in G.factors if f.componentwise]]
     raise ConfigError(f"unknown name {name!r}; bounds apply to {', '.join(known) or 'nothing'}")
 

@@ -11,9 +11,21 @@ the cost and extra constraints as expression strings (see :mod:`ocgroupoid.expre
       cost: "0.5*dot(u, u)"                                # u: the controls
     parameters: {inertia: [1.0, 2.0, 3.0]}                 # names and sizes come from here
 
+Controls of their own (thrust along a body axis, fewer controls than velocities) are named
+with their sizes and push through ``force``, the generalised force on the actuated
+velocities as an expression of the states and the controls::
+
+      lagrangian: "0.5*dot(xi[0:3], J*xi[0:3]) + 0.5*m*dot(xi[3:6], xi[3:6]) - m*gravity*g[2, 3]"
+      controls: {f: 1, tau: 3}
+      force: "[tau, 0, 0, f]"                              # thrust f along body z
+      cost: "(f - m*gravity)**2 + dot(tau, tau)"
+
 Symbols in expressions: the parameters; the base coordinates of pair and sphere factors (by
-their state name); the velocities (by name); their rates ``<velocity>_dot`` (order 2); and,
-with a Lagrangian, the controls ``u`` (and each control by its name). Without a Lagrangian,
+their state name) and the states of group factors (a rotation as its 3x3 matrix, a pose as
+its 4x4 homogeneous matrix: ``g[2, 3]`` is the height); the velocities (by name); their
+rates ``<velocity>_dot`` (order 2); and, with a Lagrangian, the controls ``u`` (and each
+control by its name). ``path`` entries are ``expression <= 0``, or comparisons
+``lhs <= rhs``, ``lhs >= rhs`` and ``lhs == rhs`` (an equality path constraint). Without a Lagrangian,
 ``controls`` maps names to expressions. ``order: 1`` gives a first-order problem
 ``min int cost(q, y) dt`` subject to the constraints. The optional ``describe`` maps names to
 their unit (``x: m``) or to ``{meaning, unit, components}`` for plots and solution files
@@ -73,14 +85,20 @@ class Definition(Strict):
         None, description="velocities that carry controls: names (Omega), components "
         "(Omega[0], dphi[0:2]) or indices of all the velocities, as a list or one string")
     input_matrix: str | None = Field(None, description="F = input_matrix @ u (default I)")
-    controls: list[str] | dict[str, str] | None = Field(
-        None, description="control names (with a Lagrangian) or name: expression")
+    force: str | None = Field(
+        None, description="the generalised force on the actuated velocities as an expression "
+        "of the states and the controls of their own (controls: {name: size}), e.g. "
+        "'[tau, 0, 0, f]' for thrust along body z; instead of input_matrix")
+    controls: list[str] | dict[str, str | int] | None = Field(
+        None, description="control names (with a Lagrangian), name: size (with force), or "
+        "name: expression (without a Lagrangian)")
     cost: str = Field(description="running cost integrand")
     constraints: dict[str, str] = Field(default_factory=dict,
                                         description="extra constraints name: expression = 0")
     path: dict[str, str] = Field(
-        default_factory=dict, description="path inequalities name: expression <= 0, imposed "
-        "wherever the scheme evaluates its constraints (e.g. a keep-out cone)")
+        default_factory=dict, description="path constraints name: expression (meaning "
+        "expression <= 0) or a comparison 'lhs <= rhs', 'lhs >= rhs', 'lhs == rhs', imposed "
+        "wherever the scheme evaluates its constraints (a keep-out cone, R e3 == e3)")
     terminal_cost: str | None = Field(None, description="Mayer term on the final node")
     describe: dict[str, Described | str] = Field(
         default_factory=dict, description="optional names and units for plots and solution "
@@ -183,20 +201,32 @@ def _problem(d: Definition, G: Groupoid, params: BaseModel, initial: BaseModel,
     if d.lagrangian is not None:
         if d.order != 2:
             raise ConfigError(f"{where('definition', 'lagrangian')}: a Lagrangian needs order 2")
-        if not d.actuated:
-            raise ConfigError(f"{where('definition', 'lagrangian')}: with a Lagrangian, list "
-                              "the actuated velocities in definition.actuated")
-        B = expr(d.input_matrix, "definition", "input_matrix") if d.input_matrix else None
-        names = d.controls if isinstance(d.controls, list) else None
         lagrangian = expr(d.lagrangian, "definition", "lagrangian")
-        actuated = actuated_indices(G, d.actuated, where("definition", "actuated"))
-        with located(where, "definition", "lagrangian"):
-            u = pb.mechanics(lagrangian, actuated, B, names)
+        if d.force is not None:
+            u = _force_controls(d, G, pb, symbols, expr, lagrangian, where)
+        else:
+            if not d.actuated:
+                raise ConfigError(f"{where('definition', 'lagrangian')}: with a Lagrangian, "
+                                  "list the actuated velocities in definition.actuated")
+            if isinstance(d.controls, dict):
+                raise ConfigError(f"{where('definition', 'controls')}: with a Lagrangian and "
+                                  "an input matrix, controls is a list of names; name: size "
+                                  "declares controls of their own, which need definition.force")
+            B = expr(d.input_matrix, "definition", "input_matrix") if d.input_matrix else None
+            actuated = actuated_indices(G, d.actuated, where("definition", "actuated"))
+            with located(where, "definition", "lagrangian"):
+                u = pb.mechanics(lagrangian, actuated, B, d.controls)
+            for (cname, _), k in zip(pb.controls, range(u.numel())):
+                symbols[cname] = u[k]
         symbols["u"] = u
-        for (cname, _), k in zip(pb.controls, range(u.numel())):
-            symbols[cname] = u[k]
+    elif d.force is not None:
+        raise ConfigError(f"{where('definition', 'force')}: a force drives the mechanics of a "
+                          "Lagrangian; write definition.lagrangian too")
     elif isinstance(d.controls, dict):
-        exprs = [expr(v, "definition", "controls", k) for k, v in d.controls.items()]
+        if any(not isinstance(v, str) for v in d.controls.values()):
+            raise ConfigError(f"{where('definition', 'controls')}: without a Lagrangian, "
+                              "controls maps names to expressions (strings)")
+        exprs = [expr(str(v), "definition", "controls", k) for k, v in d.controls.items()]
         with located(where, "definition", "controls"):
             pb.report_controls(ca.vertcat(*[ca.vec(e) for e in exprs]), list(d.controls))
     cost = expr(d.cost, "definition", "cost")
@@ -213,9 +243,18 @@ def _problem(d: Definition, G: Groupoid, params: BaseModel, initial: BaseModel,
         except ConfigError as err:
             raise ConfigError(f"{where('definition', 'describe', qname)}: {err}") from None
     for cname, text in d.path.items():
-        c = expr(text, "definition", "path", cname)
+        try:
+            lhs, op, rhs = comparison(text)
+        except ConfigError as err:
+            raise ConfigError(f"{where('definition', 'path', cname)}: {err}") from None
+        c = expr(lhs, "definition", "path", cname)
+        if rhs is not None:
+            c = c - expr(rhs, "definition", "path", cname)
         with located(where, "definition", "path", cname):
-            pb.bound(c, upper=0.0, name=cname)
+            if op == "==":
+                pb.subject_to(c, name=cname)
+            else:
+                pb.bound(c if op == "<=" else -c, upper=0.0, name=cname)
     if d.terminal_cost is not None:
         c = expr(d.terminal_cost, "definition", "terminal_cost")
         with located(where, "definition", "terminal_cost"):
@@ -226,6 +265,49 @@ def _problem(d: Definition, G: Groupoid, params: BaseModel, initial: BaseModel,
         pb.final(**{k: v for k, v in final.model_dump().items() if v is not None})
     pb.horizon(T)
     return pb
+
+
+def _force_controls(d: Definition, G: Groupoid, pb: Problem, symbols: dict[str, Any],
+                    expr: Any, lagrangian: Any, where: Any) -> Any:
+    """Declare ``definition.controls`` (name: size) as controls of their own and build the
+    mechanics with ``definition.force``; returns the stacked controls."""
+    if d.input_matrix is not None:
+        raise ConfigError(f"{where('definition', 'force')}: give input_matrix (controls "
+                          "recovered from the dynamics) or force (controls of their own), "
+                          "not both")
+    if not d.controls:
+        raise ConfigError(f"{where('definition', 'controls')}: with a force, name the controls "
+                          "and their sizes, e.g. controls: {f: 1, tau: 3}")
+    sizes = {c: 1 for c in d.controls} if isinstance(d.controls, list) else d.controls
+    for cname, size in sizes.items():
+        _reserved(cname, where("definition", "controls", cname))
+        if isinstance(size, bool) or not isinstance(size, int) or size < 1:
+            raise ConfigError(f"{where('definition', 'controls', cname)}: with a force, a "
+                              f"control maps to its number of components (an integer >= 1), "
+                              f"got {size!r}")
+        with located(where, "definition", "controls", cname):
+            sym = pb.control(cname, size)
+        symbols[cname] = sym if size > 1 else sym[0]
+    force = expr(d.force, "definition", "force")
+    actuated = actuated_indices(G, d.actuated, where("definition", "actuated")) \
+        if d.actuated else None
+    with located(where, "definition", "force"):
+        return pb.mechanics(lagrangian, actuated, force=force)
+
+
+_COMPARISON = re.compile(r"(<=|>=|==)")
+
+
+def comparison(text: str) -> tuple[str, str, str | None]:
+    """``lhs <= rhs`` -> (lhs, "<=", rhs); a plain expression -> (text, "<=", None)
+    (meaning ``text <= 0``). One comparison at most."""
+    parts = _COMPARISON.split(text)
+    if len(parts) == 1:
+        return text, "<=", None
+    if len(parts) != 3 or not parts[0].strip() or not parts[2].strip():
+        raise ConfigError(f"path constraint {text!r}: write one comparison, 'lhs <= rhs', "
+                          "'lhs >= rhs' or 'lhs == rhs' (or an expression meaning <= 0)")
+    return parts[0], parts[1], parts[2]
 
 
 @contextmanager

@@ -275,6 +275,8 @@ class _Compiler:
                             "drop the index")
         n = base.numel()
         index = node.slice
+        if isinstance(index, ast.Tuple):
+            return self._entry(node, base, index.elts)
         if isinstance(index, ast.Slice):
             lo, hi, step = (self._index(p) if p is not None else None
                             for p in (index.lower, index.upper, index.step))
@@ -295,6 +297,35 @@ class _Compiler:
                             f"use 0..{n - 1} (or -{n}..-1 from the end)" if n else
                             f"{what} is empty")
         return base[i % n]
+
+    def _entry(self, node: ast.Subscript, base: Any, parts: list[ast.expr]) -> Value:
+        """``M[i, j]``, ``M[0:3, 3]``: rows and columns of a matrix (a rotation's 3x3, a
+        pose's 4x4), each an integer or a slice within the matrix's size."""
+        what = _text(node.value, 30)
+        if len(parts) != 2:
+            raise self.fail(node, f"{_text(node)}: a matrix takes two indices [row, column]",
+                            "write e.g. R[0, 2] or g[0:3, 3]")
+        picked = []
+        for p, size, axis in zip(parts, (base.size1(), base.size2()), ("row", "column")):
+            if isinstance(p, ast.Slice):
+                lo, hi, step = (self._index(x) if x is not None else None
+                                for x in (p.lower, p.upper, p.step))
+                if step == 0:
+                    raise self.fail(node, f"{_text(node)}: a slice step cannot be zero",
+                                    "write a step of 1 or more, or leave it out")
+                rng = list(range(*slice(lo, hi, step).indices(size)))
+            else:
+                i = self._index(p)
+                if not -size <= i < size:
+                    raise self.fail(node, f"{_text(node)}: {axis} {i} is out of range for "
+                                    f"{what}, which has {size} {axis}s",
+                                    f"use 0..{size - 1}")
+                rng = [i % size]
+            if not rng:
+                raise self.fail(node, f"{_text(node)} selects no {axis} of {what}",
+                                f"choose {axis}s within 0..{size - 1}")
+            picked.append(rng)
+        return base[picked[0], picked[1]]
 
     def _index(self, node: ast.AST) -> int:
         value = node.value if isinstance(node, ast.Constant) else None

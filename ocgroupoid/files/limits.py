@@ -46,7 +46,7 @@ def memory_bytes() -> int:
 def variables_per_interval(pb: Problem) -> int:
     """An upper bound of the decision variables per interval over every scheme."""
     G = pb.groupoid
-    return 2 * G.algebra_dim + G.state_size
+    return 2 * G.algebra_dim + G.state_size + 2 * pb.U.numel()
 
 
 def check_size(pb: Problem, N: int, starts: int, where: str) -> None:

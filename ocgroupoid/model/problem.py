@@ -31,7 +31,8 @@ import numpy as np
 from ..errors import ConfigError, DimensionError
 from ..groupoid.base import Factor
 from ..groupoid.product import Groupoid
-from .mechanics import Mechanics, split
+from .mechanics import Mechanics, control_rank, split
+from .symbols import foreign_message, symbol_labels
 from .values import check_horizon, check_vector, number
 
 
@@ -150,6 +151,8 @@ class Problem:
         self.T_free = False
         self.T_bounds: tuple[float, float] = (0.0, np.inf)
         self.descriptions: dict[str, Description] = {}  # names and units (describe)
+        #: controls declared as variables of their own (:meth:`control`), by name
+        self.inputs: dict[str, ca.SX] = {}
 
     @property
     def end_velocities(self) -> bool:
@@ -176,6 +179,46 @@ class Problem:
         """All parameter symbols, stacked in declaration order."""
         syms = [p.symbol for p in self.params.values()]
         return ca.vertcat(*syms) if syms else ca.SX.zeros(0, 1)
+
+    @property
+    def U(self) -> ca.SX:
+        """The controls declared with :meth:`control`, stacked in declaration order (empty
+        when the controls are recovered from the dynamics)."""
+        syms = list(self.inputs.values())
+        return ca.vertcat(*syms) if syms else ca.SX.zeros(0, 1)
+
+    @property
+    def explicit_controls(self) -> bool:
+        """Whether the controls are decision variables of their own (:meth:`control`)."""
+        return bool(self.inputs)
+
+    def control(self, name: str, size: int = 1) -> ca.SX:
+        """Declare a control as a variable of its own (second-order problems), e.g. a thrust
+        ``f`` and body torques ``tau`` (size 3); returns its symbol. The generalised force it
+        exerts is any expression of the state and the controls, given to
+        :meth:`mechanics` as ``force=``; the cost, bounds and constraints read it by name.
+        Its components are reported as ``name`` (size 1) or ``name1 .. name<size>``."""
+        if self.order != 2:
+            raise ConfigError(f"control {name!r}: controls of their own drive second-order "
+                              "problems (mechanics); in a first-order problem the velocities "
+                              "are the controls")
+        if self.dynamics is not None:
+            raise ConfigError(f"control {name!r}: declare the controls before mechanics()")
+        if not isinstance(name, str) or not name.isidentifier():
+            raise ConfigError(f"a control's name is an identifier such as 'f' or 'tau', got "
+                              f"{name!r}")
+        taken = {*self.params, *self.groupoid.state_names, *self.groupoid.velocity_names,
+                 *self.inputs}
+        if name in taken:
+            raise ConfigError(f"control {name!r}: the name is already a parameter, state, "
+                              "velocity or control of this problem; choose another")
+        if isinstance(size, bool) or not isinstance(size, (int, np.integer)) or size < 1:
+            raise ConfigError(f"control {name!r}: size is an integer >= 1, got {size!r}")
+        sym = ca.SX.sym(name, int(size))
+        self.inputs[name] = sym
+        names = [name] if size == 1 else [f"{name}{i + 1}" for i in range(int(size))]
+        self.controls += list(zip(names, ca.vertsplit(sym)))
+        return sym
 
     @property
     def parameter_slices(self) -> dict[str, slice]:
@@ -244,30 +287,92 @@ class Problem:
 
     # -- the continuous problem ------------------------------------------------------------
 
-    def mechanics(self, lagrangian: ca.SX, actuated: str | Sequence[str] | Sequence[int],
-                  input_matrix: Any = None, control_names: Sequence[str] | None = None
-                  ) -> ca.SX:
+    def mechanics(self, lagrangian: ca.SX,
+                  actuated: str | Sequence[str] | Sequence[int] | None = None,
+                  input_matrix: Any = None, control_names: Sequence[str] | None = None,
+                  force: Any = None) -> ca.SX:
         """Controlled Euler-Lagrange dynamics of ``lagrangian`` (second-order problems).
 
-        ``actuated`` names velocities (or indices of y) that carry the control force
-        ``F = input_matrix @ u``; the rest become constraints ``Phi^A = 0``. Returns the
-        controls u as expressions of (q, y, dy), ready for :meth:`minimize`.
+        The Lagrangian ``l(q, g, y)`` may read the node states of group factors
+        (:meth:`node_state`: gravity ``m gravity p_3`` on SE(3)); their trivialised
+        derivative enters the equations (forced Euler-Poincare, :mod:`.mechanics`).
+
+        ``actuated`` names velocities (or indices of y) that carry the generalised force
+        (default: all of them); the rest become constraints ``Phi^A = 0``. Either
+
+        * ``input_matrix`` (square, an expression of q, g and the parameters; default I):
+          ``F = input_matrix @ u``, the controls u are recovered from the actuated
+          equations and returned as expressions of (q, g, y, dy); or
+        * ``force``: ``F(q, g, y, u)`` on the actuated components, an expression of the
+          controls declared with :meth:`control` (``vertcat(tau, 0, 0, f)``: thrust along
+          body z) — fewer controls than actuated components is underactuation. Returns the
+          stacked controls.
         """
         if self.order != 2:
             raise ConfigError("mechanics() builds a second-order problem; use order=2")
         if self.dynamics is not None:
             raise ConfigError("mechanics() was already called for this problem")
         lagrangian = sx(lagrangian, "the Lagrangian")
-        input_matrix = None if input_matrix is None else sx(input_matrix, "the input matrix")
-        self._check_symbols(lagrangian, "the Lagrangian", rates=False)  # reduced: no R
+        self._check_symbols(lagrangian, "the Lagrangian", rates=False, states=True)
+        if actuated is None:
+            actuated = list(range(self.y.numel()))
+        if force is not None:
+            if input_matrix is not None:
+                raise ConfigError("mechanics(): give input_matrix (F = B u, controls recovered "
+                                  "from the dynamics) or force (controls of their own), not "
+                                  "both")
+            if not self.inputs:
+                raise ConfigError("mechanics(force=...): declare the controls first, e.g. "
+                                  "f = pb.control('f'); tau = pb.control('tau', 3)")
+            if control_names is not None:
+                raise ConfigError("mechanics(force=...): the controls are named by "
+                                  "pb.control(name, size); drop control_names")
+            force = ca.vec(sx(force, "the force"))
+            self._check_symbols(force, "the force", rates=False, states=True, controls=True)
+            self._check_controls_enter(force)
+        elif self.inputs:
+            raise ConfigError(f"controls {list(self.inputs)} were declared with pb.control: "
+                              "pass the generalised force they exert, "
+                              "mechanics(l, actuated=..., force=...)")
+        else:
+            input_matrix = None if input_matrix is None else sx(input_matrix, "the input matrix")
+            if input_matrix is not None:
+                self._check_symbols(input_matrix, "the input matrix", rates=False,
+                                    velocities=False, states=True)
         mech = split(self.groupoid, lagrangian, self.q, self.y, self.dy,
-                     self._indices(actuated), input_matrix)
+                     self._indices(actuated), input_matrix, self.s, force, self.U)
         self.dynamics = mech
         if mech.phi.numel():
             self.subject_to(mech.phi, name="Phi")
-        names = list(control_names or [f"u{i + 1}" for i in range(mech.u.numel())])
-        self.report_controls(mech.u, names)
+        if force is None:
+            names = list(control_names or [f"u{i + 1}" for i in range(mech.u.numel())])
+            self.report_controls(mech.u, names)
         return mech.u
+
+    def _check_controls_enter(self, force: ca.SX) -> None:
+        """Every declared control must push somewhere, and independently of the others: the
+        Jacobian dF/du has full column rank at sample states."""
+        unused = [n for n, sym in self.inputs.items() if not ca.depends_on(force, sym)]
+        if unused:
+            raise ConfigError(f"the force does not depend on the controls {unused}: a control "
+                              "that exerts no force cannot be determined; use it in force= "
+                              "or remove it")
+        args = ca.vertcat(self.q, self.s, self.y, self.P)
+        rng = np.random.default_rng(0)
+        samples = []
+        for _ in range(3):
+            s = np.concatenate([f.sample_state(rng) for f in self.groupoid.factors]) \
+                if self.groupoid.factors else np.zeros(0)
+            q = np.array(ca.Function("base", [self.s], [self.groupoid.base(self.s)])(s)
+                         ).ravel()
+            samples.append(np.concatenate([q, s, rng.normal(size=self.y.numel()),
+                                           self.parameter_values()]))
+        rank = control_rank(force, self.U, args, np.array(samples))
+        if rank < self.U.numel():
+            raise ConfigError(
+                f"the {self.U.numel()} controls are not independent in the force: dF/du has "
+                f"rank {rank} at sample states, so some combination of them exerts no force "
+                "and cannot be determined; remove or merge controls")
 
     def minimize(self, integrand: ca.SX) -> None:
         """Set the running cost: ``int integrand dt`` (Ltilde for order 2, l for order 1); it
@@ -275,7 +380,7 @@ class Problem:
         integrand = sx(integrand, "the cost integrand")
         if integrand.shape != (1, 1):
             raise DimensionError(f"the cost integrand is a scalar, got shape {integrand.shape}")
-        self._check_symbols(integrand, "cost", states=True)
+        self._check_symbols(integrand, "the cost", states=True, controls=True)
         self.cost = integrand
 
     def terminal_cost(self, expr: ca.SX) -> None:
@@ -314,7 +419,7 @@ class Problem:
         component) or expressions of the parameters (they change without a rebuild).
         """
         expr = ca.vec(sx(expr, f"bound {name or ''}".strip()))
-        self._check_symbols(expr, "bound", states=True)
+        self._check_symbols(expr, f"bound {name or ''}".strip(), states=True, controls=True)
         n = expr.numel()
         label = name or f"bound{len(self.inequalities) + 1}"
         if any(b.name == label for b in self.inequalities):
@@ -347,9 +452,11 @@ class Problem:
         return side
 
     def subject_to(self, expr: ca.SX, name: str = "c") -> None:
-        """Add equality constraints ``expr(q, y[, dy]) = 0`` along the trajectory."""
+        """Add equality constraints ``expr = 0`` along the trajectory, imposed wherever the
+        scheme evaluates its constraints; ``expr`` reads q, the node states (``R e_3 = e_3``),
+        the velocities, their rates (order 2), the controls and the parameters."""
         expr = ca.vec(sx(expr, f"constraint {name}"))
-        self._check_symbols(expr, f"constraint {name}")
+        self._check_symbols(expr, f"constraint {name}", states=True, controls=True)
         if any(n == name for n, _ in self.constraints):
             raise ConfigError(f"constraint name {name!r} used twice")
         self.constraints.append((name, expr))
@@ -367,20 +474,16 @@ class Problem:
         self._end_expression(name, expr, self.invariants, "conserved quantity")
 
     def final_condition(self, name: str, expr: ca.SX) -> None:
-        """Impose ``expr(q_N, y_N) = 0`` on the final node (order 1: ``expr(q_N)``), for
-        conditions that are not a prescribed value of a state or velocity component."""
-        self._end_expression(name, expr, self.final_conditions, "final condition")
+        """Impose ``expr(q_N, g_N, y_N) = 0`` on the final node (order 1: ``expr(q_N, g_N)``),
+        for conditions that are not a prescribed value of a state or velocity component
+        (``R_N e_3 = e_3``: upright, heading free)."""
+        self._end_expression(name, expr, self.final_conditions, "final condition", states=True)
 
     def _end_expression(self, name: str, expr: ca.SX, where: list[tuple[str, ca.SX]],
-                        what: str) -> None:
+                        what: str, states: bool = False) -> None:
         expr = ca.vec(sx(expr, f"{what} {name}"))
-        args = [self.q, self.y, self.P] if self.order == 2 else [self.q, self.P]
-        allowed = {v.name() for v in ca.symvar(ca.vertcat(*args))}
-        foreign = [v.name() for v in ca.symvar(expr) if v.name() not in allowed]
-        if foreign:
-            raise ConfigError(f"{what} {name!r} uses {foreign}: it may depend on the base "
-                              f"coordinates q{', the velocities y' if self.order == 2 else ''}"
-                              " and the parameters only")
+        self._check_symbols(expr, f"{what} {name!r}", states=states, rates=False,
+                            velocities=self.order == 2)
         if any(n == name for n, _ in where):
             raise ConfigError(f"{what} name {name!r} used twice")
         where.append((name, expr))
@@ -388,31 +491,45 @@ class Problem:
     def report_controls(self, expr: ca.SX, names: Sequence[str]) -> None:
         """Declare which expressions are the controls the Solution reports."""
         expr = ca.vec(sx(expr, "the controls"))
+        if self.inputs:
+            raise ConfigError(f"the controls {list(self.inputs)} were declared with "
+                              "pb.control and are reported by their names")
         if len(names) != expr.numel():
             raise DimensionError(f"{expr.numel()} controls but {len(names)} names")
-        self._check_symbols(expr, "controls")
+        self._check_symbols(expr, "the controls", states=True)
         self.controls = list(zip(names, ca.vertsplit(expr)))
 
     def _check_symbols(self, expr: ca.SX, what: str, states: bool = False,
                        rates: bool = True, velocities: bool = True,
-                       params_only: bool = False) -> None:
-        """Refuse symbols that are not this problem's (compared by identity, not by name)."""
-        groups = [("parameters", self.P)]
+                       params_only: bool = False, controls: bool = False) -> None:
+        """Refuse symbols that ``what`` may not read, or that are not this problem's
+        (compared by identity, not by name); the message names them as the user does."""
+        groups = [("the parameters", self.P)]
         if not params_only:
-            groups.append(("q", self.q))
-            if velocities:
-                groups.append(("y", self.y))
-            if rates and self.order == 2:
-                groups.append(("dy", self.dy))
+            groups.append(("the base coordinates (pb.state)", self.q))
             if states:
-                groups.append(("node states", self.s))
-        allowed = ca.vertcat(*[g for _, g in groups])
-        foreign = [v.name() for v in ca.symvar(expr)
-                   if not any(ca.is_equal(v, a) for a in ca.vertsplit(allowed))]
-        if foreign:
-            raise ConfigError(
-                f"{what} uses symbols {foreign} that are not this problem's "
-                f"{', '.join(n for n, _ in groups)}")
+                groups.append(("the node states (pb.node_state)", self.s))
+            if velocities:
+                groups.append(("the velocities", self.y))
+            if rates and self.order == 2:
+                groups.append(("their rates (pb.acceleration)", self.dy))
+            if controls:
+                groups.append(("the controls (pb.control)", self.U))
+        allowed = ca.vertsplit(ca.vertcat(*[g for _, g in groups]))
+        bad = [v for v in ca.symvar(expr) if not any(ca.is_equal(v, a) for a in allowed)]
+        if not bad:
+            return
+        mine = symbol_labels(self)
+        known = list(dict.fromkeys(label for v in bad for sym, label in mine
+                                   if ca.is_equal(v, sym)))
+        strangers = [v.name() for v in bad if not any(ca.is_equal(v, sym) for sym, _ in mine)]
+        may = ", ".join(n for n, _ in groups)
+        parts = []
+        if known:
+            parts.append(f"{what} may not depend on {', '.join(known)}: it may read {may}")
+        if strangers:
+            parts.append(foreign_message(what, strangers))
+        raise ConfigError("; ".join(parts))
 
     # -- boundary conditions -------------------------------------------------------------
 
@@ -538,6 +655,8 @@ class Problem:
             return "velocities", G.by_velocity(name)[1].algebra_dim
         if name in controls:
             return "controls", 1
+        if name in self.inputs:  # a control of its own with several components (tau)
+            return "controls", self.inputs[name].numel()
         if name == "u" and controls:
             return "controls", len(controls)
         if name in constraints:
@@ -595,6 +714,12 @@ class Problem:
             group = d.get("u") if "u" not in names else None
             comps = list(group.components) if group else list(names)
             units = list(group.units) if group else [""] * len(names)
+            k = 0
+            for n, sym in self.inputs.items():  # a described control of its own (tau)
+                if n in d and d[n].kind == "controls" and sym.numel() > 1:
+                    comps[k:k + sym.numel()] = d[n].components
+                    units[k:k + sym.numel()] = d[n].units
+                k += sym.numel()
             for j, n in enumerate(names):
                 if n in d and d[n].kind == "controls":
                     comps[j], units[j] = d[n].components[0], d[n].units[0]

@@ -67,7 +67,7 @@ class FinalConditions:
         self.rates = {name: _conservation(pb, C) for name, C in pb.invariants}
         q = G.base(s)
         y = v if pb.end_velocities else ca.SX.zeros(dg)
-        at_node = (ca.vertcat(pb.q, pb.y), ca.vertcat(q, y))
+        at_node = (ca.vertcat(pb.q, pb.s, pb.y), ca.vertcat(q, s, y))
         rows: list[ca.SX] = []
         self.rows: list[Row] = []
         for name, C in pb.invariants:
@@ -169,7 +169,7 @@ class FinalConditions:
         for _ in range(SAMPLES):
             s, y = self.node(p, rng, prescribed=False)
             q = np.array(self.base(s)).ravel()
-            c, c0, A, b = (np.array(M) for M in self.rates[name](q, y, P))
+            c, c0, A, b = (np.array(M) for M in self.rates[name](q, s, y, P))
             lhs, rhs = np.hstack([A, b]), np.hstack([c, c0])
             mu = np.linalg.lstsq(lhs.T, rhs.T, rcond=None)[0] if lhs.size else \
                 np.zeros((0, rhs.shape[0]))
@@ -215,15 +215,17 @@ class FinalConditions:
 
 
 def _conservation(pb: "Problem", C: ca.SX) -> ca.Function:
-    """``(c, c0, A, b)``: ``dC/dt = c0 + c dy`` and the constraints ``Phi = b + A dy``."""
+    """``(c, c0, A, b)``: ``dC/dt = c0 + c z`` and the constraints ``Phi = b + A z`` in the
+    unknowns ``z = (dy, u)`` (u: controls declared as variables), at a node ``(q, s, y)``."""
     phi = ca.vertcat(*[c for _, c in pb.constraints]) if pb.constraints else ca.SX(0, 1)
     rate = ca.mtimes(ca.jacobian(C, pb.y), pb.dy)
     if pb.q.numel():
         rate += ca.mtimes(ca.jacobian(C, pb.q), anchor(pb.groupoid, pb.q, pb.y))
-    zero = ca.DM.zeros(pb.dy.numel())
-    return ca.Function("conservation", [pb.q, pb.y, pb.P],
-                       [ca.jacobian(rate, pb.dy), ca.substitute(rate, pb.dy, zero),
-                        ca.jacobian(phi, pb.dy), ca.substitute(phi, pb.dy, zero)])
+    z = ca.vertcat(pb.dy, pb.U)
+    zero = ca.DM.zeros(z.numel())
+    return ca.Function("conservation", [pb.q, pb.s, pb.y, pb.P],
+                       [ca.jacobian(rate, z), ca.substitute(rate, z, zero),
+                        ca.jacobian(phi, z), ca.substitute(phi, z, zero)])
 
 
 def _rank(M: np.ndarray, scale: float) -> int:

@@ -1,8 +1,9 @@
 """The continuous controlled dynamics of a problem, as one right-hand side.
 
-Second-order problems with mechanics: ``M(q, y) dy/dt = F(u) - c(q, y)`` with
-``F_actuated = B(q) u`` (the controlled Euler-Lagrange(-Poincare) equations, ``M`` the
-Jacobian of the EL operator in ``dy``); second-order problems whose controls are the
+Second-order problems with mechanics: ``M(q, g, y) dy/dt = F(q, g, y, u) - c(q, g, y)``
+with ``F_actuated = B(q, g) u`` or the declared force of controls of their own (the
+controlled Euler-Lagrange(-Poincare) equations, ``M`` the Jacobian of the EL operator in
+``dy``, g the group states a potential reads); second-order problems whose controls are the
 accelerations: ``dy/dt = u``; first-order problems whose controls are velocity components:
 the constraints ``psi(q, y) = 0`` solved for the remaining velocities. States follow the
 reconstruction equations (``G.state_rate``: ``dR/dt = R hat(Omega)``, ...).
@@ -45,11 +46,11 @@ class Dynamics:
         ctrl = stages.controls
         if pb.order == 2 and pb.dynamics is not None:
             mech = pb.dynamics
-            EL = ca.substitute(ca.substitute(mech.EL, pb.q, q), pb.y, y)
+            here = ([pb.q, pb.s, pb.y], [q, s, y])
+            EL = ca.substitute([mech.EL], *here)[0]
             M = ca.jacobian(EL, pb.dy)
             c = ca.substitute(EL, pb.dy, ca.DM.zeros(G.algebra_dim))
-            F = ca.SX.zeros(G.algebra_dim)
-            F[list(mech.actuated)] = ca.mtimes(ca.substitute(mech.input_matrix, pb.q, q), u)
+            F = ca.substitute([mech.generalised_force(u, G.algebra_dim)], *here)[0]
             self._second(ca.solve(M, F - c))
             self.implied = {"Phi"}
         elif pb.order == 2 and ca.depends_on(ctrl, pb.dy) and ca.is_equal(ctrl, pb.dy, 2):

@@ -10,7 +10,9 @@ from __future__ import annotations
 
 import casadi as ca
 
+from ..errors import ConfigError
 from ..lie.retraction import Retraction
+from ..model.mechanics import least_squares_controls
 from ..model.problem import Problem
 
 
@@ -31,9 +33,27 @@ class Stages:
         ends = [c for _, c in problem.final_conditions]
         self.final_conditions = ca.Function(
             "final_conditions", [s, y, problem.P],
-            [ca.substitute(ca.vertcat(*ends), ca.vertcat(problem.q, problem.y),
-                           ca.vertcat(G.base(s), y)) if ends else ca.SX(0, 1)],
+            [ca.substitute(ca.vertcat(*ends), ca.vertcat(problem.q, problem.s, problem.y),
+                           ca.vertcat(G.base(s), s, y)) if ends else ca.SX(0, 1)],
             ["s", "y", "P"], ["residual"])
+        self.n_u = problem.U.numel()
+        #: ``estimate(s, y, dy, P, u0) -> u``: the controls declared as variables that best
+        #: explain the motion (least squares on the actuated equations, from u0), where a
+        #: scheme carries none (guesses, the ends of order4's intervals); None without them
+        self.estimate: ca.Function | None = None
+        if self.n_u:
+            mech = problem.dynamics
+            if mech is None or mech.force is None:
+                raise ConfigError(f"{problem.name}: the controls {list(problem.inputs)} need "
+                                  "the force they exert: call pb.mechanics(l, actuated=..., "
+                                  "force=...)")
+            dy, u0 = ca.SX.sym("dy", dg), ca.SX.sym("u0", self.n_u)
+            affine = not ca.depends_on(ca.jacobian(mech.force, problem.U), problem.U)
+            u = least_squares_controls(mech.force, problem.U, mech.EL[list(mech.actuated)],
+                                       u0, affine)
+            self.estimate = ca.Function("control_estimate", [s, y, dy, problem.P, u0],
+                                        self.at([u], s, y, dy), ["s", "y", "dy", "P", "u0"],
+                                        ["u"])
 
     @property
     def controls(self) -> ca.SX:
@@ -75,12 +95,16 @@ class Stages:
         assert pb.cost is not None
         return pb.weights["effort"] * pb.cost
 
-    def at(self, exprs: list[ca.SX], s: ca.SX, y: ca.SX, dy: ca.SX | None = None
-           ) -> list[ca.SX]:
-        """Expressions of (q, node states, y[, dy]) evaluated at a point with state s."""
+    def at(self, exprs: list[ca.SX], s: ca.SX, y: ca.SX, dy: ca.SX | None = None,
+           u: ca.SX | None = None) -> list[ca.SX]:
+        """Expressions of (q, node states, y[, dy][, u]) evaluated at a point with state s
+        (u: the values of the controls declared as variables, :meth:`Problem.control`)."""
         pb, G = self.problem, self.problem.groupoid
         old, new = [pb.q, pb.s, pb.y], [G.base(s), s, y]
         if dy is not None:
             old.append(pb.dy)
             new.append(dy)
+        if u is not None and pb.U.numel():
+            old.append(pb.U)
+            new.append(u)
         return ca.substitute(exprs, old, new)

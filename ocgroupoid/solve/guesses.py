@@ -9,8 +9,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from typing import Any
+
+from ..errors import ConfigError
 from ..model.problem import GuessContext
 from ..nlp.transcription import Guess, Transcription
+from .solution import Solution
 
 
 def geodesic_guesses(tr: Transcription, p: np.ndarray) -> list[Guess]:
@@ -75,3 +79,50 @@ def interpolate(coarse: Transcription, x: np.ndarray, p: np.ndarray, N: int) -> 
     t_f = (np.arange(N) + 0.5) * T / N
     return Guess(f"interpolated from N={coarse.N}",
                  np.column_stack([np.interp(t_f, t_c, xi[:, j]) for j in range(xi.shape[1])]))
+
+
+def as_guess(guess: Any, tr: Transcription, p: np.ndarray) -> Guess:
+    """What ``solve(guess=...)`` accepts, as a Guess of this grid:
+
+    * a :class:`Guess` (interval velocities N x dim y, or a whole NLP point ``x``);
+    * a :class:`Solution` of the same problem on any N or scheme: its velocities interpolated
+      linearly in time onto this grid's interval midpoints (its own point as is when the
+      NLP is the same);
+    * an array of interval velocities, N x dim y.
+    """
+    dg = tr.problem.groupoid.algebra_dim
+    if isinstance(guess, Solution):
+        if guess.x.size == tr.nx and guess.N == tr.N and \
+                guess.discretization.get("scheme") == tr.disc.scheme:
+            return Guess(f"solution ({guess.discretization.get('scheme')}, N={guess.N})",
+                         np.zeros((0, 0)), guess.x)
+        V = np.hstack([guess.velocities[f.velocity] for f in tr.problem.groupoid.factors]) \
+            if guess.velocities else np.zeros((0, dg))
+        t = np.asarray(guess.velocity_t, dtype=float)
+        if V.shape[1] != dg or t.size != V.shape[0] or t.size < 1:
+            raise ConfigError(f"guess: the solution of {guess.problem!r} has velocities of "
+                              f"{V.shape[1]} components, this problem {dg}: pass a solution "
+                              "of the same problem")
+        T = tr.horizon_of(p)
+        mid = (np.arange(tr.N) + 0.5) / tr.N * T
+        scaled = t * (T / guess.T) if guess.T > 0 else t  # onto this horizon
+        xi = np.column_stack([np.interp(mid, scaled, V[:, j]) for j in range(dg)])
+        return Guess(f"interpolated from a solution ({guess.discretization.get('scheme')}, "
+                     f"N={guess.N})", xi)
+    if isinstance(guess, Guess):
+        if guess.x is None and np.shape(guess.xi) != (tr.N, dg):
+            raise ConfigError(f"guess {guess.label!r}: its velocities are shaped "
+                              f"{np.shape(guess.xi)}, this grid needs (N, dim y) = "
+                              f"({tr.N}, {dg})")
+        if guess.x is not None and np.size(guess.x) != tr.nx:
+            raise ConfigError(f"guess {guess.label!r}: its point has {np.size(guess.x)} "
+                              f"variables, this NLP {tr.nx}: pass interval velocities, or a "
+                              "Solution (interpolated onto this grid)")
+        return guess
+    xi = np.asarray(guess, dtype=float) if isinstance(guess, (list, tuple, np.ndarray)) \
+        else None
+    if xi is None or xi.shape != (tr.N, dg) or not np.all(np.isfinite(xi)):
+        raise ConfigError(f"guess: give an og.Guess, a Solution or finite interval velocities "
+                          f"shaped (N, dim y) = ({tr.N}, {dg}), got {type(guess).__name__}"
+                          f"{' of shape ' + str(np.shape(xi)) if xi is not None else ''}")
+    return Guess("given velocities", xi)

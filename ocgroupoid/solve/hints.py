@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import casadi as ca
 import numpy as np
 
 from ..nlp.transcription import RawResult, Transcription
@@ -15,8 +16,7 @@ HINTS = {
     "boundary value or drop a constraint (`ocgroupoid check` names the redundant ones)",
     "Maximum_Iterations_Exceeded": "try multistart, continuation from a coarser N, a longer "
     "horizon, or a larger solver.max_iter",
-    "Invalid_Number_Detected": "a stage evaluated to NaN/Inf: with first_order a step turned "
-    "by pi/2 or more; increase N or use the cayley retraction",
+    "Invalid_Number_Detected": "a stage evaluated to NaN/Inf",
     "Diverging_Iterates": "the iterates left every physical scale (|x| > 1e8): start from "
     "another guess (multistart, continuation) or raise solver.ipopt.diverging_iterates_tol if "
     "your variables are that large",
@@ -43,6 +43,11 @@ def hint_for(tr: Transcription, r: RawResult, steps: np.ndarray) -> str:
         return ""
     troubles = tr.scheme.troubles(np.concatenate([r.x, r.p]), failed=True)
     parts = [HINTS.get(r.status, "try multistart or continuation"), *troubles]
+    if r.status == "Invalid_Number_Detected":
+        if tr.scheme.retraction == "first_order":
+            parts.append("with first_order a step turned by pi/2 or more; increase N or use "
+                         "the cayley retraction")
+        parts += nonsmooth(tr)
     if r.status in UNMET:
         if not troubles:  # a coordinate singularity also makes rows dependent: not the cause
             parts += [f"unreachable as posed: {d}, or prescribe the value the motion implies"
@@ -66,3 +71,31 @@ def worst_violation(tr: Transcription, r: RawResult) -> str:
     if not miss.size or miss[i] <= 0:
         return "the last iterate meets every constraint"
     return f"violated most at the last iterate: {tr.row_labels()[i]} (by {miss[i]:.2g})"
+
+
+#: operations whose derivative is undefined where their argument is zero (norm = sqrt(sumsqr))
+KINKS = {ca.OP_SQRT: "a square root or norm", ca.OP_FABS: "an absolute value"}
+
+
+def nonsmooth(tr: Transcription) -> list[str]:
+    """The user's expressions (cost, bounds, constraints) with a kink or an infinite
+    derivative at zero — ``norm(F)`` at F = 0, at rest — and their smooth forms: IPOPT's
+    derivatives there are NaN."""
+    pb = tr.problem
+    exprs = [("the cost", pb.cost), ("the terminal cost", pb.terminal),
+             *[(f"bound {b.name!r}", b.expr) for b in pb.inequalities],
+             *[(f"constraint {n!r}", c) for n, c in pb.constraints if n != "Phi"]]
+    out = []
+    for what, expr in exprs:
+        if expr is None or not expr.numel():
+            continue
+        f = ca.Function("kinks", [ca.vertcat(*ca.symvar(expr))], [expr])
+        found = sorted({KINKS[op] for k in range(f.n_instructions())
+                        if (op := f.instruction_id(k)) in KINKS})
+        if found:
+            out.append(f"{what} takes {' and '.join(found)}, whose derivative is undefined "
+                       "where its argument is 0 (norm(F) at F = 0, at rest): write a smooth "
+                       "form — a squared norm sumsqr(F), sqrt(sumsqr(F) + eps**2), or the "
+                       "magnitude as a control of its own (pb.control, thrust along a body "
+                       "axis)")
+    return out

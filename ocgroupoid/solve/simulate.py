@@ -89,8 +89,11 @@ class DiscreteFlow:
         dg, ds, nu = G.algebra_dim, G.state_size, len(pb.controls)
         s, xp, xn, T = ca.SX.sym("s", ds), ca.SX.sym("xp", dg), ca.SX.sym("xn", dg), ca.SX.sym("T")
         u = ca.SX.sym("u", nu)
-        _, phi, u_expr, _ = scheme.node(s, xp, xn, T, pb.P)
-        res = ca.vertcat(u_expr - u, phi)
+        if scheme.stages.n_u:  # controls of their own: the node equations EL - F(u) = 0
+            res = scheme.node(s, xp, xn, u, T, pb.P)[1]
+        else:  # recovered controls: u_k(xi) = u, and the unactuated equations
+            _, phi, u_expr, _ = scheme.node(s, xp, xn, ca.SX(0, 1), T, pb.P)
+            res = ca.vertcat(u_expr - u, phi)
         if res.numel() != dg:
             raise ConfigError(f"the node equations of {pb.name} are {res.numel()} (controls "
                               f"{nu}, constraints {phi.numel()}) for {dg} velocities: a "

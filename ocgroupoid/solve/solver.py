@@ -21,7 +21,7 @@ from ..nlp.schemes import DEFAULT_RULE, DEFAULT_SCHEME
 from ..nlp.transcription import DEFAULT_BACKEND, Discretization, Guess, RawResult, Transcription
 from ..nlp.watch import Listener
 from . import mesh, richardson
-from .guesses import geodesic_guesses, interpolate, model_guesses, perturbed_guesses
+from .guesses import as_guess, geodesic_guesses, interpolate, model_guesses, perturbed_guesses
 from .interrupt import Interrupt, interruptible
 from .readout import make_solution
 from .solution import Solution
@@ -124,7 +124,8 @@ class Solver:
     def solve(self, params: dict[str, Any] | None = None, initial: dict[str, Any] | None = None,
               final: dict[str, Any] | None = None, T: float | None = None,
               multistart: bool | int = False, continuation: Sequence[int] | None = None,
-              guess: Guess | None = None, replay: bool = True, progress: Progress = _noop,
+              guess: Guess | Solution | np.ndarray | None = None, replay: bool = True,
+              progress: Progress = _noop,
               replay_tolerance: float = REPLAY_TOLERANCE, warm: Solution | None = None
               ) -> Solution:
         """Solve with IPOPT and return a diagnosed Solution; ``success`` is the
@@ -139,6 +140,9 @@ class Solver:
         through the continuous dynamics (a few ms; it decides whether the plan lands,
         ``replay_tolerance``). ``progress`` hears each start and, every 0.25 s, IPOPT's
         iteration. Ctrl-C stops the solve with the best point so far, ``status: interrupted``.
+        ``guess``: where to start instead of the geodesic guesses: an :class:`og.Guess`
+        (interval velocities, N x dim y), a Solution of the same problem on any grid or
+        scheme (interpolated onto this one), or an array of interval velocities.
         ``warm``: a Solution of this compiled problem (same N and structure) to start from,
         primal and dual (IPOPT's warm start), for re-solves with new parameters or boundary
         values; one start, no continuation.
@@ -156,17 +160,20 @@ class Solver:
         if any(n >= self.disc.N for n in levels):
             raise ConfigError(f"continuation grids must be coarser than N={self.disc.N}: {levels}")
         results: list[RawResult] = []
-        seeds: list[Guess] | None = [guess] if guess is not None else None
+        given = guess
         prev: tuple[Transcription, RawResult] | None = None
         coarse = prev  # the grid solved before the last one (continuation)
+        notes: list[str] = []  # continuation grids that landed above a coarser minimum
         with interruptible() as interrupt:
             for n in [*levels, self.disc.N]:
                 tr = self._at(n)
                 p = tr.pack(params, initial, final, T)
                 if prev is not None:
                     starts = [interpolate(prev[0], prev[1].x, prev[1].p, n)]
+                elif given is not None:
+                    starts = [as_guess(given, tr, p)]
                 else:
-                    starts = seeds or self.guesses(tr, p, multistart)
+                    starts = self.guesses(tr, p, multistart)
                 level: list[RawResult] = []
                 budget: int | None = None  # iterations of a further start
                 for i, g in enumerate(starts):
@@ -180,6 +187,10 @@ class Solver:
                 if prev is None:
                     results = level
                 best = min(level, key=lambda r: (not r.success, r.cost))
+                if prev is not None and not interrupt.requested and \
+                        _higher(best, prev[1], CONTINUATION_GAP):
+                    best, note = self._bridge(prev, n, best, params, initial, final, T, progress)
+                    notes.append(note)
                 coarse, prev = prev, (tr, best)
                 if interrupt.requested:
                     break
@@ -192,6 +203,9 @@ class Solver:
         progress("diagnostics")
         solution = make_solution(tr, best, distinct_minima(results), replay, self.ipopt,
                                  replay_tolerance)
+        if notes:
+            solution.diagnostics["continuation"] = notes
+            solution = replace(solution, hint="; ".join([*notes, *filter(None, [solution.hint])]))
         if coarse is not None and coarse[1].success and best.success and \
                 tr is self.transcription:  # Richardson from the last continuation grid
             p = tr.scheme.accuracy
@@ -199,6 +213,37 @@ class Solver:
                 best.cost, coarse[1].cost, tr.N, coarse[0].N, p, p)
         return replace(solution, starts=len(results),
                        ipopt_seconds_total=sum(r.solve_seconds for r in results))
+
+    def _bridge(self, prev: tuple[Transcription, RawResult], n: int, landed: RawResult,
+                params: dict[str, Any] | None, initial: dict[str, Any] | None,
+                final: dict[str, Any] | None, T: float | None, progress: Progress
+                ) -> tuple[RawResult, str]:
+        """The grid n landed above the minimum the coarser grid found: solve it again through
+        every doubling of the coarse grid (each interpolated from the last), keep the cheaper
+        of the two, and say what happened."""
+        (ctr, cr), m = prev, prev[0].N * 2
+        chain = []
+        while m < n:
+            chain.append(m)
+            m *= 2
+        src = prev
+        for k in [*chain, n]:
+            tr = self._at(k)
+            p = tr.pack(params, initial, final, T)
+            progress(f"N={k}: continued from N={src[0].N} (bridging)")
+            r = tr.solve(interpolate(src[0], src[1].x, src[1].p, k), p)
+            src = (tr, r)
+        bridged = src[1]
+        better = min((landed, bridged), key=lambda r: (not r.success, r.cost))
+        what = (f"continuation: N={n} interpolated from N={ctr.N} landed at cost "
+                f"{landed.cost:.6g}, above the minimum {cr.cost:.6g} that N={ctr.N} found")
+        if better is bridged and not _higher(bridged, cr, CONTINUATION_GAP):
+            return better, (f"{what}; solving through N={', '.join(map(str, chain or [n]))} "
+                            f"reached {bridged.cost:.6g}, kept")
+        return better, (f"{what}, and through the doublings too ({bridged.cost:.6g}): "
+                        f"kept {better.cost:.6g}; the fine grid may lack that minimum, or "
+                        "try solver.continuation with grids closer together, or multistart "
+                        "on the fine grid")
 
     def _adapt(self, tr: Transcription, r: RawResult, params: dict[str, Any] | None,
                initial: dict[str, Any] | None, final: dict[str, Any] | None,
@@ -217,6 +262,21 @@ class Solver:
         p = phased.pack(params, initial, final, tr.horizon(r.x, r.p))
         result = phased.solve(interpolate(tr, r.x, r.p, self.disc.N), p)
         return (phased, result) if result.success else (tr, r)
+
+
+#: a continued grid whose cost exceeds the coarser grid's minimum by more than this fraction
+#: landed on another minimum (discretisation alone moves a cost by far less between grids)
+CONTINUATION_GAP = 0.01
+
+
+def _higher(fine: RawResult, coarse: RawResult, gap: float) -> bool:
+    """Whether a solved fine grid landed above a solved coarse grid's minimum by more than
+    ``gap`` of its size (or failed where the coarse grid solved)."""
+    if not coarse.success:
+        return False
+    if not fine.success:
+        return True
+    return fine.cost > coarse.cost + gap * max(abs(coarse.cost), 1e-12)
 
 
 def compile(problem: Problem, N: int = 64, retraction: str = "cayley", rule: str = DEFAULT_RULE,

@@ -47,6 +47,7 @@ class Node:
     xi_next: ca.SX  # xi_k
     h: ca.SX
     retractions: list[Retraction]
+    u: ca.SX | None = None  # the node's controls, when declared as variables
 
     @property
     def q(self) -> ca.SX:
@@ -63,8 +64,11 @@ class Node:
     def substitute(self, expr: ca.SX) -> ca.SX:
         """Evaluate an expression of (q, node states, y, dy) at this node (midpoint rule)."""
         pb = self.problem
-        return ca.substitute([expr], [pb.q, pb.s, pb.y, pb.dy],
-                             [self.q, self.s, self.y, self.dy])[0]
+        old, new = [pb.q, pb.s, pb.y, pb.dy], [self.q, self.s, self.y, self.dy]
+        if self.u is not None and self.u.numel():
+            old.append(pb.U)
+            new.append(self.u)
+        return ca.substitute([expr], old, new)[0]
 
 
 def stage_function(name: str, sizes: list[int], body: Callable[..., Any]) -> ca.Function:
@@ -96,7 +100,7 @@ class IntervalVelocities(Scheme):
         G = self.problem.groupoid
         dg = G.algebra_dim
         self.layout = layout
-        stage = layout.stage.reshape(self.N, dg + G.state_size).T
+        stage = layout.stage[:self.N * (dg + G.state_size)].reshape(self.N, dg + G.state_size).T
         self.xi = stage[:dg]
         self.states = np.hstack([layout.s0[:, None], stage[dg:]])
         self.end_velocity = layout.VN
@@ -191,23 +195,58 @@ class NodeMidpoint(IntervalVelocities):
             known = [DEFAULT_RULE, *problem.rules]
             raise ConfigError(f"unknown rule {rule!r} for {problem.name}; choose {known}")
         G = problem.groupoid
-        ds, dg = G.state_size, G.algebra_dim
+        ds, dg, nu = G.state_size, G.algebra_dim, self.stages.n_u
         s, xp, xn = ca.SX.sym("s", ds), ca.SX.sym("xi_prev", dg), ca.SX.sym("xi_next", dg)
-        T = ca.SX.sym("T")
-        node = Node(problem, s, xp, xn, self._h(T), self.retractions)
+        T, u = ca.SX.sym("T"), ca.SX.sym("u", nu)
+        node = Node(problem, s, xp, xn, self._h(T), self.retractions, u)
         if rule != DEFAULT_RULE:
             phi = ca.vec(ca.SX(problem.rules[rule](node)))
         else:
             phi = ca.vertcat(*[node.substitute(c) for _, c in problem.constraints]) \
                 if problem.constraints else ca.SX(0, 1)
         h = self._h(T)
-        #: ``node(s_k, xi_{k-1}, xi_k, T, P) -> (L_d, Phi_d, u_k, H_k)`` at node k (H: the
-        #: bounds' expressions)
+        #: ``node(s_k, xi_{k-1}, xi_k, u_k, T, P) -> (L_d, Phi_d, u_k, H_k)`` at node k (H:
+        #: the bounds' expressions; u_k: the node's controls when they are variables of their
+        #: own, else empty and the controls come out of the dynamics)
         self.node = ca.Function(
-            "node", [s, xp, xn, T, problem.P],
+            "node", [s, xp, xn, u, T, problem.P],
             [h * node.substitute(self.stages.running_cost()), h * phi,
              node.substitute(self.stages.controls), node.substitute(self.stages.inequalities)],
-            ["s", "xi_prev", "xi_next", "T", "P"], ["L", "Phi", "u", "H"])
+            ["s", "xi_prev", "xi_next", "u_in", "T", "P"], ["L", "Phi", "u", "H"])
+        if nu:
+            assert self.stages.estimate is not None
+            #: ``node_controls(s_k, xi_{k-1}, xi_k, T, P) -> u_k`` that best explain the
+            #: motion at a node (the guesses' controls)
+            self.node_controls = ca.Function("node_controls", [s, xp, xn, T, problem.P], [
+                self.stages.estimate(s, node.y, node.dy, problem.P, ca.DM.zeros(nu))])
+
+    @property
+    def n_stage(self) -> int:
+        return super().n_stage + (self.N + 1) * self.stages.n_u
+
+    def index(self, layout: Layout) -> None:
+        """x: per interval ``[xi_k, s_{k+1}]``, then the node controls ``u_0 .. u_N`` when
+        they are variables of their own."""
+        super().index(layout)
+        G, nu = self.problem.groupoid, self.stages.n_u
+        self.U = layout.stage[self.N * (G.algebra_dim + G.state_size):].reshape(
+            self.N + 1, nu).T
+
+    def point(self, XI: ca.MX, pick: Pick) -> list[tuple[np.ndarray, ca.MX]]:
+        """As for every interval-velocity scheme; declared controls: those that best explain
+        the guess's motion at each node (:attr:`node_controls`)."""
+        parts = super().point(XI, pick)
+        if not self.stages.n_u:
+            return parts
+        lay = self.layout
+        assert lay is not None
+        S = ca.horzcat(pick(lay.s0), parts[1][1])
+        prev, nxt = ca.horzcat(XI[:, :1], XI), ca.horzcat(XI, XI[:, -1:])
+        return parts + [(self.U, self.node_controls.map(self.N + 1)(S, prev, nxt,
+                                                                    pick(lay.T), pick(lay.P)))]
+
+    def unpack(self, w: np.ndarray) -> dict[str, np.ndarray]:
+        return {**super().unpack(w), "u": w[self.U].T}
 
     def blocks(self) -> list[Block]:
         G, N, lay = self.problem.groupoid, self.N, self.layout
@@ -216,24 +255,25 @@ class NodeMidpoint(IntervalVelocities):
         S, XI, T, P = self.states, self.xi, lay.T, lay.P
 
         def node(weight: float, ghost: str, kind: Kind) -> Any:
-            def body(s: ca.SX, a: ca.SX, b: ca.SX, t: ca.SX, par: ca.SX) -> Any:
+            def body(s: ca.SX, a: ca.SX, b: ca.SX, u: ca.SX, t: ca.SX, par: ca.SX) -> Any:
                 xp, xn = {"prev": (2 * a - b, b), "next": (a, 2 * b - a), "": (a, b)}[ghost]
-                L, phi, _, H = self.node(s, xp, xn, t, par)
+                L, phi, _, H = self.node(s, xp, xn, u, t, par)
                 return (weight * L, phi) if kind is Kind.PATH else (ca.SX(1, 1), H)
             return body
 
-        sizes = [ds, dg, dg, 1, npar]
+        U = self.U
+        sizes = [ds, dg, dg, self.stages.n_u, 1, npar]
         names = [n for n, c in self.problem.constraints for _ in range(c.numel())]
         rows = {Kind.PATH: [names[r] if r < len(names) else f"Phi[{r}]"
                             for r in range(self.node.size1_out(1))],
                 Kind.INEQUALITY: self.stages.inequality_names}
         kinds = [Kind.PATH] + ([Kind.INEQUALITY] if self.problem.inequalities else [])
-        stages = (("node0", 0.5, "prev", columns(S[:, 0], lay.V0, XI[:, 0], T, P, ncols=1),
-                   [0]),
-                  ("node", 1.0, "", columns(S[:, 1:N], XI[:, :N - 1], XI[:, 1:], T, P,
-                                            ncols=N - 1), list(range(1, N))),
-                  ("nodeN", 0.5, "next", columns(S[:, N], XI[:, N - 1], lay.VN, T, P, ncols=1),
-                   [N]))
+        stages = (("node0", 0.5, "prev", columns(S[:, 0], lay.V0, XI[:, 0], U[:, 0], T, P,
+                                                 ncols=1), [0]),
+                  ("node", 1.0, "", columns(S[:, 1:N], XI[:, :N - 1], XI[:, 1:], U[:, 1:N], T,
+                                            P, ncols=N - 1), list(range(1, N))),
+                  ("nodeN", 0.5, "next", columns(S[:, N], XI[:, N - 1], lay.VN, U[:, N], T, P,
+                                                 ncols=1), [N]))
         blocks = [self.reconstruction()]
         for kind in kinds:
             suffix = "" if kind is Kind.PATH else "_bounds"
@@ -254,7 +294,7 @@ class NodeMidpoint(IntervalVelocities):
         prev = ca.horzcat(2 * V0 - XI[:, 0], XI)
         nxt = ca.horzcat(XI, 2 * VN - XI[:, -1])
         t = np.arange(N + 1) / N
-        u = self.node.map(N + 1)(S, prev, nxt, T, P)[2]
+        u = self.node.map(N + 1)(S, prev, nxt, pick(self.U), T, P)[2]
         return Readout(self.readout_steps(pick), S, t,
                        ca.horzcat(V0, (XI[:, :-1] + XI[:, 1:]) / 2, VN), t, u, t,
                        piecewise_linear(u, t, T))

@@ -150,9 +150,10 @@ class QuadraticGauss(Scheme):
         super().__init__(problem, N, "exp", rule)
         _check_rule(problem, rule)
         G, pb = problem.groupoid, problem
-        ds, dg = G.state_size, G.algebra_dim
+        ds, dg, nu = G.state_size, G.algebra_dim, self.stages.n_u
         s = ca.SX.sym("s", ds)
         y0, y1, b = (ca.SX.sym(n, dg) for n in ("y0", "y1", "b"))
+        ug = ca.SX.sym("u", 2 * nu)  # controls of their own at the two Gauss points
         T = ca.SX.sym("T")
         h = T / N
 
@@ -165,21 +166,40 @@ class QuadraticGauss(Scheme):
 
         step = theta(1.0)
 
-        def at(expr: ca.SX, tau: float) -> ca.SX:
+        def at(expr: ca.SX, tau: float, u: ca.SX | None = None) -> ca.SX:
             y, dy = quadratic(y0, y1, b, h, tau)
-            return self.stages.at([expr], G.step(s, self.retractions, theta(tau)), y, dy)[0]
+            return self.stages.at([expr], G.step(s, self.retractions, theta(tau)), y, dy,
+                                  u)[0]
 
-        args = [s, y0, y1, b, T, pb.P]
-        names = ["s", "y0", "y1", "b", "T", "P"]
+        # the controls at the bound points: their variables at the Gauss points, and at the
+        # ends the controls that best explain the motion there (from the line through the
+        # Gauss values): exact wherever Phi holds, like the recovered controls
+        u_at: dict[float, ca.SX | None] = {float(c): None for c in BOUND_POINTS}
+        if nu:
+            assert self.stages.estimate is not None
+            u1, u2 = ug[:nu], ug[nu:]
+            u_at[float(GAUSS2[0])], u_at[float(GAUSS2[1])] = u1, u2
+            for c in (0.0, 1.0):
+                line = u1 + (u2 - u1) * (c - GAUSS2[0]) / (GAUSS2[1] - GAUSS2[0])
+                y, dy = quadratic(y0, y1, b, h, c)
+                u_at[c] = self.stages.estimate(G.step(s, self.retractions, theta(c)), y, dy,
+                                               pb.P, line)
+
+        args = [s, y0, y1, b, ug, T, pb.P]
+        names = ["s", "y0", "y1", "b", "u_gauss", "T", "P"]
         cost = self.stages.running_cost()
-        L = h * sum(float(w) * at(cost, float(c)) for c, w in zip(GAUSS3, GAUSS3_W))
+        if nu:  # the controls live at the Gauss points: 2-point Gauss (order 4)
+            L = h / 2 * sum(at(cost, float(c), u_at[float(c)]) for c in GAUSS2)
+        else:
+            L = h * sum(float(w) * at(cost, float(c)) for c, w in zip(GAUSS3, GAUSS3_W))
         phi, ineq = self.stages.constraints, self.stages.inequalities
-        Phi = ca.vertcat(*[h / 2 * at(phi, float(c)) for c in GAUSS2]) if phi.numel() \
-            else ca.SX(0, 1)
-        H = ca.vertcat(*[at(ineq, float(c)) for c in BOUND_POINTS]) if ineq.numel() \
-            else ca.SX(0, 1)
-        #: ``interval(s_k, y_k, y_{k+1}, b_k, T, P) -> (L_d, Phi_d, H)``: Phi_d stacks the two
-        #: Gauss points, the bounds' expressions H the :data:`BOUND_POINTS`
+        Phi = ca.vertcat(*[h / 2 * at(phi, float(c), u_at[float(c)]) for c in GAUSS2]) \
+            if phi.numel() else ca.SX(0, 1)
+        H = ca.vertcat(*[at(ineq, float(c), u_at[float(c)]) for c in BOUND_POINTS]) \
+            if ineq.numel() else ca.SX(0, 1)
+        #: ``interval(s_k, y_k, y_{k+1}, b_k, u_k, T, P) -> (L_d, Phi_d, H)``: Phi_d stacks
+        #: the two Gauss points, the bounds' expressions H the :data:`BOUND_POINTS`; u_k: the
+        #: controls of their own at the Gauss points (empty when they are recovered)
         self.interval = ca.Function("interval", args, [L, Phi, H], names, ["L", "Phi", "H"])
         #: ``increment(y_k, y_{k+1}, b_k, T) -> W_k``, exponential coordinates of the step
         self.increment = ca.Function("increment", [y0, y1, b, T], [step],
@@ -187,16 +207,24 @@ class QuadraticGauss(Scheme):
         u = self.stages.controls
         #: controls at :data:`SAMPLES` of an interval (one-sided at its ends), stacked
         self.control_samples = ca.Function(
-            "control_samples", args, [ca.vertcat(*[at(u, float(c)) for c in SAMPLES])],
-            names, ["u"])
+            "control_samples", args,
+            [ca.vertcat(*[at(u, float(c), u_at[float(c)]) for c in SAMPLES])], names, ["u"])
+        if nu:
+            #: ``gauss_controls(s_k, y_k, y_{k+1}, b_k, T, P) -> u_k`` that best explain the
+            #: motion at the Gauss points (the guesses' controls)
+            self.gauss_controls = ca.Function("gauss_controls", args[:4] + args[5:], [
+                ca.vertcat(*[self.stages.estimate(G.step(s, self.retractions, theta(float(c))),
+                                                  *quadratic(y0, y1, b, h, float(c)), pb.P,
+                                                  ca.DM.zeros(nu)) for c in GAUSS2])])
 
     @property
     def n_stage(self) -> int:
         G = self.problem.groupoid
-        return (2 * self.N - 1) * G.algebra_dim + self.N * G.state_size
+        return (2 * self.N - 1) * G.algebra_dim + self.N * (G.state_size + 2 * self.stages.n_u)
 
     def index(self, layout: Layout) -> None:
-        """x per interval k: ``b_k``, ``y_{k+1}`` (not the last: y_N is V_N), ``s_{k+1}``."""
+        """x per interval k: ``b_k``, ``y_{k+1}`` (not the last: y_N is V_N), ``s_{k+1}``;
+        then the controls of their own at the Gauss points, when declared."""
         G, N = self.problem.groupoid, self.N
         dg, ds = G.algebra_dim, G.state_size
         self.layout = layout
@@ -213,6 +241,7 @@ class QuadraticGauss(Scheme):
                 c += dg
             self.states[:, k + 1] = layout.stage[c:c + ds]
             c += ds
+        self.UG = layout.stage[c:].reshape(N, 2 * self.stages.n_u).T
         self.end_velocity = layout.VN
 
     def blocks(self) -> list[Block]:
@@ -229,8 +258,9 @@ class QuadraticGauss(Scheme):
                         Kind.RECONSTRUCTION, rows=[f"reconstruction {c}" for c in comps],
                         columns=[f"interval {k}" for k in range(N)],
                         next=slice(ds + 3 * dg, 2 * ds + 3 * dg))]
-        return blocks + gauss_blocks(self, [ds, dg, dg, dg, 1, npar],
-                                     columns(*cols, steps, lay.P, ncols=N), "Gauss point")
+        return blocks + gauss_blocks(self, [ds, dg, dg, dg, 2 * self.stages.n_u, 1, npar],
+                                     columns(*cols, self.UG, steps, lay.P, ncols=N),
+                                     "Gauss point")
 
     def _increments(self, Y: ca.MX, B: ca.MX, T: ca.MX) -> ca.MX:
         return self.increment.map(self.N)(Y[:, :-1], Y[:, 1:], B, T)
@@ -251,9 +281,14 @@ class QuadraticGauss(Scheme):
                                           (lay.VN, Y[:, N], pick(lay.VN)))]
         Y = ca.horzcat(ends[0], Y[:, 1:N], ends[1])
         B = 1.5 * (XI - (Y[:, :-1] + Y[:, 1:]) / 2)  # mean = (y_k + y_{k+1})/2 + 2 b_k/3
-        S = self.stages.step.mapaccum(N)(pick(lay.s0), self._increments(
-            Y, B, local_horizons(self, pick)))
-        return [(self.Y, Y), (self.B, B), (self.states[:, 1:], S)]
+        H = local_horizons(self, pick)
+        S = self.stages.step.mapaccum(N)(pick(lay.s0), self._increments(Y, B, H))
+        parts = [(self.Y, Y), (self.B, B), (self.states[:, 1:], S)]
+        if self.stages.n_u:
+            S0 = ca.horzcat(pick(lay.s0), S[:, :-1])
+            parts.append((self.UG, self.gauss_controls.map(N)(S0, Y[:, :-1], Y[:, 1:], B, H,
+                                                              pick(lay.P))))
+        return parts
 
     def readout(self, pick: Pick) -> Readout:
         """Node velocities; controls sampled at :data:`SAMPLES` of each interval and the
@@ -264,7 +299,8 @@ class QuadraticGauss(Scheme):
         Y, B = pick(self.Y), pick(self.B)
         steps = self._increments(Y, B, T)
         S = ca.horzcat(pick(lay.s0), self.stages.step.mapaccum(N)(pick(lay.s0), steps))
-        samples = self.control_samples.map(N)(S[:, :-1], Y[:, :-1], Y[:, 1:], B, T, P)
+        samples = self.control_samples.map(N)(S[:, :-1], Y[:, :-1], Y[:, 1:], B,
+                                              pick(self.UG), T, P)
         m = self.stages.controls.numel()
         t_u = np.concatenate([(np.arange(N)[:, None] + SAMPLES[None, :3]).ravel() / N, [1.0]])
         u = ca.horzcat(ca.reshape(samples[:3 * m, :], m, 3 * N), samples[3 * m:, -1]) if m \
@@ -282,8 +318,8 @@ class QuadraticGauss(Scheme):
     def unpack(self, w: np.ndarray) -> dict[str, np.ndarray]:
         lay = self.layout
         assert lay is not None
-        return {"y": w[self.Y].T, "b": w[self.B].T, "s": w[self.states].T, "T": w[lay.T][0],
-                "P": w[lay.P]}
+        return {"y": w[self.Y].T, "b": w[self.B].T, "s": w[self.states].T, "u": w[self.UG].T,
+                "T": w[lay.T][0], "P": w[lay.P]}
 
 
 class GaussStages(Scheme):

@@ -90,7 +90,8 @@ class RK4Shooting(Scheme):
             if self.second:
                 y = X[self.nz:]
                 dy = self.dynamics.acceleration(s, y, u, pb.P)
-                return ca.vertcat(self.z_rate(z, y), dy), self.stages.at(quantities, s, y, dy)
+                return ca.vertcat(self.z_rate(z, y), dy), self.stages.at(quantities, s, y, dy,
+                                                                         u)
             y = self.dynamics.velocity(s, u, pb.P)
             return self.z_rate(z, y), self.stages.at(quantities, s, y)
 
@@ -226,8 +227,9 @@ class RK4Shooting(Scheme):
         Zg = self.to_z.map(N)(S[:, 1:])
         s, y, dy = ca.SX.sym("s", S.size1()), ca.SX.sym("y", XI.size1()), \
             ca.SX.sym("dy", XI.size1())
-        ctrl = ca.Function("ctrl", [s, y, dy, pb.P], self.stages.at(
-            [self.stages.controls], s, y, dy if pb.order == 2 else None))
+        ctrl = ca.Function("ctrl", [s, y, dy, pb.P], [self.stages.estimate(
+            s, y, dy, pb.P, ca.DM.zeros(self.nu))] if self.stages.estimate is not None else
+            self.stages.at([self.stages.controls], s, y, dy if pb.order == 2 else None))
         out = [(self.Z, Zg)]
         if not self.second:
             return out + [(self.U, ctrl.map(N)(S[:, :N], XI, ca.MX.zeros(XI.shape), P))]
