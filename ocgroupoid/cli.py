@@ -125,7 +125,7 @@ def solve(
             with _status("building the NLP...", quiet):
                 solver = compile_problem(problem, f.horizon.N, d.retraction, d.rule,
                                          f.solver.ipopt, d.scheme, d.steps, f.solver.jit,
-                                         f.solver.backend)
+                                         f.solver.backend, bound_points=d.bound_points)
             with _status("solving...", quiet) as status:
                 sol = solver.solve(multistart=f.solver.multistart,
                                    continuation=f.solver.continuation or None,

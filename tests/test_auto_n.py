@@ -31,10 +31,13 @@ NO_MULTISTART = "solver.multistart=false"  # where the file's multi-start finds 
 CASES: dict[str, tuple[float, list[str], int]] = {
     "cart_pole": (1e-4, [NO_MULTISTART], 512),  # active bounds: irregular convergence
     "custom_rigid_body": (1e-5, [NO_MULTISTART], 128),
+    "dubins_car": (1e-4, [NO_MULTISTART], 128),  # switches of the turn rate: irregular
     "free_flyer": (1e-4, [NO_MULTISTART], 128),
     "heavy_top_rotors": (1e-4, [], 128),  # the multi-start finds the cheapest minimum
     "plate_ball": (1e-4, [NO_MULTISTART], 128),
     "plate_ball_rotating": (1e-5, [NO_MULTISTART], 128),
+    "quadrotor": (1e-5, [NO_MULTISTART], 256),
+    "quadrotor_min_time": (1e-3, [], 128),  # bang-bang thrust and torques; local minima
     "reaction_wheels": (1e-4, [NO_MULTISTART], 128),
     "so3_minimum_time": (1e-3, [NO_MULTISTART], 128),  # bang-bang: order 2 even for order4
     "so3_rest_to_rest": (1e-5, [NO_MULTISTART], 128),

@@ -113,7 +113,7 @@ def bounded() -> dict[int, og.Solution]:
 
 
 def test_bounded_slew_touches_and_holds_the_bound(bounded) -> None:
-    free = og.solve(rigid_body(), N=64, replay=False).cost
+    free = og.solve(rigid_body(), N=64).cost
     for N, sol in bounded.items():
         assert sol.success, sol.status
         assert sol.cost > free
@@ -135,9 +135,9 @@ def test_parameter_bounds_change_without_rebuilding(monkeypatch) -> None:
     umax = pb.parameter("umax", 1, 0.3)
     pb.bound(controls(pb), -umax, umax, name="u")
     solver = og.compile(pb, N=24)
-    first = solver.solve(replay=False)
+    first = solver.solve()
     monkeypatch.setattr(ca, "nlpsol", lambda *a, **k: (_ for _ in ()).throw(AssertionError))
-    tighter = solver.solve(params={"umax": 0.29}, replay=False)  # 0.25 is infeasible in T = 5
+    tighter = solver.solve(params={"umax": 0.29})  # 0.25 is infeasible in T = 5
     assert first.success and tighter.success and tighter.cost > first.cost
     assert np.max(np.abs(tighter.controls)) <= 0.29 + 1e-8
 
@@ -152,7 +152,7 @@ def test_keep_out_cone_holds_at_every_node(scheme: str) -> None:
     """The sensor axis R e1 of the unconstrained slew passes through SENSOR; a 30 degree
     cone around it must be left out. (An attitude is a second-order state: the best path
     grazes the cone, at one node or two, rather than sliding along it.)"""
-    free = og.solve(rigid_body(), N=64, scheme=scheme, replay=False).cost
+    free = og.solve(rigid_body(), N=64, scheme=scheme).cost
     pb = rigid_body()
     R = pb.node_state("R")
     cos = np.cos(np.radians(30))
@@ -205,7 +205,7 @@ def test_problem_file_bounds_free_time_and_objective(tmp_path) -> None:
     pb = files.build(cfg)
     assert pb.T_free and pb.T_bounds == (1.0, 20.0) and pb.weights["time"] == 0.1
     assert [b.name for b in pb.inequalities] == ["u", "Omega"]
-    sol = og.solve(pb, N=32, replay=False)
+    sol = og.solve(pb, N=32)
     assert sol.success and 1.0 < sol.T < 20.0
     assert np.max(np.abs(sol.controls)) <= 0.3 + 1e-8
 
@@ -291,7 +291,7 @@ def soft_landing(weight: float = 12.0) -> og.Problem:
 def test_terminal_cost_balances_effort_and_landing(scheme: str) -> None:
     errors = []
     for N in (8, 16, 32):
-        sol = og.solve(soft_landing(), N=N, scheme=scheme, replay=False)
+        sol = og.solve(soft_landing(), N=N, scheme=scheme)
         assert sol.success, sol.status
         errors.append(abs(sol.cost - 3.0))
         assert abs(sol.states["x"][-1, 0] - 0.5) <= 10 * errors[-1] + 1e-9
@@ -316,9 +316,9 @@ initial: {x: [0.0], v: [0.0]}
 final: {v: [0.0]}
 """
     cfg = files.load(edit(text, tmp_path))
-    sol = og.solve(files.build(cfg), N=16, replay=False)
-    api = og.solve(soft_landing(), N=16, replay=False)
+    sol = og.solve(files.build(cfg), N=16)
+    api = og.solve(soft_landing(), N=16)
     assert sol.success and abs(sol.cost - api.cost) <= 1e-10
     heavier = og.solve(files.build(files.load(edit(text, tmp_path), ["parameters.weight=36"])),
-                       N=16, replay=False)
+                       N=16)
     assert abs(heavier.states["x"][-1, 0] - 0.75) <= 1e-2  # a* = 36 / 48

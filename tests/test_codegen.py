@@ -144,7 +144,7 @@ def built(request, tmp_path_factory) -> Built:
     d = f.discretization
     exp = export_c(files.build(cfg), folder / "c", N_TEST, d.retraction, d.rule, f.solver.ipopt,
                    build=True, cflags=CFLAGS, scheme=d.scheme, backend=f.solver.backend)
-    sol = exp.solver.solve(replay=False)
+    sol = exp.solver.solve()
     return Built(request.param.id, exp, exp.solver.transcription, sol)
 
 
@@ -242,7 +242,7 @@ def test_same_binary_solves_a_second_instance(built: Built, tmp_path: Path) -> N
     """Other physical parameters and target, read from a parameter file whose quaternions
     are scaled by -2 (normalised on reading): matches Python's solve of that instance."""
     params, final = second_instance(built.tr)
-    py = built.export.solver.solve(params=params, final=final, replay=False)
+    py = built.export.solver.solve(params=params, final=final)
     layout = built.tr.values
     values = layout.values_of(built.tr.pack(params=params, final=final))
     for b in layout.blocks:
@@ -262,7 +262,7 @@ def test_parameter_file_keys_default_to_the_exported_instance(built: Built,
     T = 1.25 * float(built.solution.T)
     path.write_text(f"# only the horizon\nT {T!r}\n")
     c = c_solution(built.binary, str(path))
-    py = built.export.solver.solve(T=T, replay=False)
+    py = built.export.solver.solve(T=T)
     if built.tr.problem.T_free:  # T is the initial guess of the horizon the NLP solves for
         assert abs(c.T - T) > 0.1
     else:
@@ -433,7 +433,7 @@ def test_failed_solve_prints_the_json_and_exits_1(tmp_path: Path) -> None:
     """IPOPT stopped by max_iter: exit code 1, success false, the status Python reports."""
     exp = export_c(_rigid_body(), tmp_path / "fail", N=8, ipopt={"max_iter": 1}, build=True,
                    cflags=CFLAGS)
-    py = exp.solver.solve(replay=False)
+    py = exp.solver.solve()
     r = run(exp.binary)
     assert r.returncode == 1 and "IPOPT failed: Maximum_Iterations_Exceeded" in r.stderr
     c = og.Solution.from_json(r.stdout)

@@ -125,8 +125,8 @@ def test_forbidden_expressions_are_named(tmp_path, key: str, value: str, expecte
 
 def test_custom_rigid_body_reproduces_the_built_in() -> None:
     cfg = files.load(ROOT / "problems" / "custom_rigid_body.yaml")
-    custom = og.solve(files.build(cfg), N=64, replay=False)
-    builtin = og.solve(rigid_body(), N=64, replay=False)
+    custom = og.solve(files.build(cfg), N=64)
+    builtin = og.solve(rigid_body(), N=64)
     assert custom.success and builtin.success
     assert abs(custom.cost - builtin.cost) <= 1e-10
     assert custom.control_names == ["u1", "u2", "u3"]

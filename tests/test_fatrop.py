@@ -152,7 +152,7 @@ def test_fatrop_reaches_ipopts_cost(name: str, scheme: str) -> None:
 
 def test_solution_json_names_the_backend(tmp_path: Path) -> None:
     sol = og.solve(files.build(files.load(ROOT / "problems" / "plate_ball.yaml")), N=16,
-                   backend="fatrop", replay=False)
+                   backend="fatrop")
     assert sol.success and sol.backend == "fatrop"
     again = og.Solution.from_json(sol.to_json(tmp_path / "s.json"))
     assert again.backend == "fatrop"

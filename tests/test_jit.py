@@ -30,10 +30,10 @@ def own_cache(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
 @pytest.mark.parametrize("factory, scheme", [(rigid_body, "order2"), (rigid_body, "order4"),
                                              (heavy_top, "order2"), (rigid_body, "rk4_quat")])
 def test_a_compiled_solve_equals_the_virtual_machine_solve(factory, scheme: str) -> None:
-    vm = og.compile(factory(), N=24, scheme=scheme).solve(multistart=False, replay=False)
+    vm = og.compile(factory(), N=24, scheme=scheme).solve(multistart=False)
     solver = og.compile(factory(), N=24, scheme=scheme, jit=True)
     assert solver.transcription.jit and solver.transcription.jit_compiled
-    jit = solver.solve(multistart=False, replay=False)
+    jit = solver.solve(multistart=False)
     assert jit.status == vm.status and jit.iterations == vm.iterations
     assert abs(jit.cost - vm.cost) <= 1e-10 * max(1.0, abs(vm.cost))
     assert np.max(np.abs(jit.x - vm.x)) <= 1e-10 * max(1.0, float(np.max(np.abs(vm.x))))
@@ -79,12 +79,12 @@ def test_a_primal_dual_warm_start_reaches_the_cold_solution_in_fewer_iterations(
     from ocgroupoid.lie import so3
 
     solver = og.compile(rigid_body(), N=32)
-    prev = solver.solve(replay=False)
+    prev = solver.solve()
     axis = np.array([1.0, 2.0, 3.0]) / np.sqrt(14.0)
     for k in (1, 2, 3):
         final = {"R": so3.exp(axis * 2.5 * (1 + 0.02 * k))}
-        cold = solver.solve(final=final, replay=False)
-        warm = solver.solve(final=final, replay=False, warm=prev)
+        cold = solver.solve(final=final)
+        warm = solver.solve(final=final, warm=prev)
         assert warm.success and warm.discretization["start"] == "warm start"
         assert abs(warm.cost - cold.cost) <= 1e-8 * cold.cost
         assert warm.iterations < cold.iterations, (warm.iterations, cold.iterations)

@@ -104,13 +104,13 @@ def test_controls_are_the_polynomial_at_their_samples(so3) -> None:
 def test_order4_steps_with_exp_whatever_the_retraction() -> None:
     """The quadratic scheme's increments are exponential coordinates (tau(tau^-1(exp W)) =
     exp W): the answer does not depend on the retraction asked for."""
-    costs = [og.solve(rigid_body(), N=12, scheme="order4", retraction=r, replay=False).cost
+    costs = [og.solve(rigid_body(), N=12, scheme="order4", retraction=r).cost
              for r in ("cayley", "exp", "first_order")]
     assert max(costs) - min(costs) <= 1e-12
 
 
 def test_multipliers_sit_at_the_gauss_points_and_enter_the_residual(so3) -> None:
-    sol = og.solve(heavy_top(), N=16, scheme="order4", multistart=True, replay=False)
+    sol = og.solve(heavy_top(), N=16, scheme="order4", multistart=True)
     t = np.asarray(sol.multipliers["t"])
     h = sol.T / 16
     assert t.size == 32 and np.allclose(t[:2] / h, [0.5 - np.sqrt(3) / 6, 0.5 + np.sqrt(3) / 6])
@@ -161,9 +161,9 @@ def test_heavy_top_converges_at_fourth_order(top) -> None:
 def test_heavy_top_continues_from_an_order2_solution(top) -> None:
     """An order2 solution, interpolated, starts order4 on a finer grid: same minimum."""
     coarse = og.compile(heavy_top(), N=32)
-    sol2 = coarse.solve(multistart=True, replay=False)
+    sol2 = coarse.solve(multistart=True)
     guess = interpolate(coarse.transcription, sol2.x, sol2.p, 64)
-    sol4 = og.compile(heavy_top(), N=64, scheme="order4").solve(guess=guess, replay=False)
+    sol4 = og.compile(heavy_top(), N=64, scheme="order4").solve(guess=guess)
     assert sol4.success and sol4.cost == pytest.approx(top[64].cost, rel=1e-9)
 
 

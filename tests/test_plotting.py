@@ -37,7 +37,7 @@ def solve_file(name: str, *sets: str) -> og.Solution:
     f, d = cfg.file, cfg.file.discretization
     solver = og.compile(files.build(cfg), f.horizon.N, d.retraction, d.rule, f.solver.ipopt,
                         d.scheme, d.steps)
-    sol = solver.solve(multistart=False, replay=False)
+    sol = solver.solve(multistart=False)
     assert sol.success, sol.status
     return sol
 
@@ -200,7 +200,7 @@ def test_the_exported_solver_writes_the_same_labels(tmp_path: Path) -> None:
     f, d = cfg.file, cfg.file.discretization
     exp = export_c(files.build(cfg), tmp_path / "c", 8, d.retraction, d.rule, f.solver.ipopt,
                    build=True, scheme=d.scheme)
-    py = exp.solver.solve(replay=False, multistart=False)
+    py = exp.solver.solve(multistart=False)
     r = subprocess.run([str(exp.binary)], capture_output=True, text=True, timeout=120)
     c = og.Solution.from_json(r.stdout)
     for key in ("time", "states", "velocities", "controls", "multipliers", "final"):

@@ -70,14 +70,14 @@ def test_replay_error_falls_at_second_order(sols) -> None:
 def test_every_retraction_is_second_order() -> None:
     pb = rigid_body()
     for ret in ("exp", "first_order"):
-        J = [og.solve(pb, N=N, retraction=ret, replay=False).cost for N in (32, 64, 128, 256)]
+        J = [og.solve(pb, N=N, retraction=ret).cost for N in (32, 64, 128, 256)]
         assert np.all(observed_orders(list(np.abs(np.diff(J)))) >= 1.8), (ret, J)
 
 
 def test_parameters_change_without_rebuilding(monkeypatch) -> None:
     """Inertia, boundary values and T go through p: one compiled solver serves them all."""
     solver = og.compile(rigid_body(), N=48)
-    first = solver.solve(replay=False)
+    first = solver.solve()
 
     def no_build(*args, **kwargs):
         raise AssertionError("nlpsol was called again")
@@ -85,10 +85,10 @@ def test_parameters_change_without_rebuilding(monkeypatch) -> None:
     monkeypatch.setattr(ca, "nlpsol", no_build)
     new = dict(params={"inertia": [2.0, 1.5, 0.8]}, final={"R": og.so3.from_rotvec([0, 0, 1])},
                initial={"Omega": [0.1, 0, 0]}, T=4.0)
-    other = solver.solve(replay=False, **new)
+    other = solver.solve(**new)
     monkeypatch.undo()
     reference = og.solve(rigid_body(inertia=[2.0, 1.5, 0.8], RT=og.so3.from_rotvec([0, 0, 1]),
-                                    Omega0=[0.1, 0, 0], T=4.0), N=48, replay=False)
+                                    Omega0=[0.1, 0, 0], T=4.0), N=48)
     assert other.success and abs(other.cost - first.cost) > 1e-3
     assert abs(other.cost - reference.cost) <= 1e-10 * max(1.0, reference.cost)
     assert other.parameters["inertia"] == [2.0, 1.5, 0.8]
@@ -105,8 +105,8 @@ def test_multistart_finds_the_long_way_round() -> None:
     pb = rigid_body(RT=og.so3.from_axis_angle([0, 0, 1], 2.8), Omega0=[0, 0, -3.0], T=2.0,
                     name="long_way")
     solver = og.compile(pb, N=64)
-    plain = solver.solve(multistart=False, replay=False)
-    multi = solver.solve(multistart=True, replay=False)
+    plain = solver.solve(multistart=False)
+    multi = solver.solve(multistart=True)
     assert plain.success and multi.success
     assert multi.cost < 0.5 * plain.cost
     costs = [m["cost"] for m in multi.minima]
@@ -117,8 +117,8 @@ def test_multistart_finds_the_long_way_round() -> None:
 
 def test_continuation_matches_direct_solve() -> None:
     pb = rigid_body()
-    direct = og.solve(pb, N=128, replay=False)
-    cont = og.compile(pb, N=128).solve(continuation=[16, 32], replay=False)
+    direct = og.solve(pb, N=128)
+    cont = og.compile(pb, N=128).solve(continuation=[16, 32])
     assert cont.success and cont.discretization["start"] == "interpolated from N=32"
     assert cont.cost == pytest.approx(direct.cost, rel=1e-9)
 

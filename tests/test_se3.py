@@ -55,7 +55,7 @@ def sols() -> dict[int, og.Solution]:
 @pytest.fixture(scope="module")
 def order4() -> dict[int, og.Solution]:
     pb = free_flyer()
-    return {N: og.solve(pb, N=N, scheme="order4", replay=False) for N in (8, 16, 32, 64)}
+    return {N: og.solve(pb, N=N, scheme="order4") for N in (8, 16, 32, 64)}
 
 
 @pytest.mark.parametrize("N", NS)
@@ -86,7 +86,7 @@ def test_cost_converges_at_second_order(sols) -> None:
 
 def test_exp_converges_at_second_order_to_the_same_cost(sols) -> None:
     pb = free_flyer()
-    J = [og.solve(pb, N=N, retraction="exp", replay=False).cost for N in NS]
+    J = [og.solve(pb, N=N, retraction="exp").cost for N in NS]
     assert np.all(cost_orders(J) >= 1.8), J
     assert abs(J[-1] - sols[128].cost) <= 1e-3 * sols[128].cost
 
@@ -114,7 +114,7 @@ def test_cost_is_the_slew_plus_the_translation(order4) -> None:
     pb.initial(R=np.eye(3), omega=[0, 0, 0])
     pb.final(R=so3.from_axis_angle([1, 2, 3], 1.5), omega=[0, 0, 0])
     pb.horizon(5.0)
-    slew = og.solve(pb, N=64, scheme="order4", replay=False).cost
+    slew = og.solve(pb, N=64, scheme="order4").cost
     assert order4[64].cost == pytest.approx(slew + translation_cost(MASS, DISPLACEMENT, 5.0),
                                             abs=1e-7)
 
@@ -125,9 +125,9 @@ def test_pure_translation_costs_six_m2_d2_over_T3() -> None:
     is linear in t)."""
     pb = free_flyer(gT=se3.from_spec({"position": DISPLACEMENT.tolist()}), name="translation")
     exact = translation_cost(MASS, DISPLACEMENT, 5.0)
-    err = [exact - og.solve(pb, N=N, replay=False).cost for N in (16, 32, 64)]
+    err = [exact - og.solve(pb, N=N).cost for N in (16, 32, 64)]
     assert np.all(np.array(err) > 0) and np.all(observed_orders(err) >= 1.95), err
-    sol = og.solve(pb, N=8, scheme="order4", replay=False)
+    sol = og.solve(pb, N=8, scheme="order4")
     assert sol.cost == pytest.approx(exact, abs=1e-12)
     assert np.allclose(sol.states["g"][:, :3, :3], np.eye(3), atol=1e-12)
     assert np.allclose(sol.controls[:, :3], 0.0, atol=1e-9)  # no torque
@@ -159,7 +159,7 @@ def test_problem_file_solves_through_the_cli(tmp_path) -> None:
     assert "Solve_Succeeded" in r.stdout
     sol = json.loads(out.read_text())
     assert sol["success"] and sol["N"] == 32 and sol["parameters"]["m"] == [2.0]
-    assert sol["cost"] == pytest.approx(og.solve(free_flyer(), N=32, replay=False).cost,
+    assert sol["cost"] == pytest.approx(og.solve(free_flyer(), N=32).cost,
                                         rel=1e-10)
     assert np.asarray(sol["states"]["g"]).shape == (33, 4, 4)
 
@@ -194,8 +194,8 @@ def test_custom_models_of_type_se3_and_se2(tmp_path) -> None:
         path.write_text(CUSTOM % values)
         pb = files.build(files.load(path))
         assert pb.groupoid.factors[0].manifold == reference.groupoid.factors[0].manifold
-        cost = og.solve(pb, N=16, replay=False).cost
-        assert cost == pytest.approx(og.solve(reference, N=16, replay=False).cost, rel=1e-10)
+        cost = og.solve(pb, N=16).cost
+        assert cost == pytest.approx(og.solve(reference, N=16).cost, rel=1e-10)
 
 
 # ------------------------------------------------------------------ SE(2)
@@ -234,5 +234,5 @@ def test_planar_rigid_body_on_se2() -> None:
     assert np.all(observed_orders(err) >= 1.8) and err[-1] <= 2e-3, err
     assert np.allclose(sols[-1].states["g"][-1], og.se2.from_spec(
         {"angle": 2.0, "position": [1.0, -0.5]}), atol=1e-9)
-    fourth = [og.solve(pb, N=N, scheme="order4", replay=False).cost for N in (16, 32)]
+    fourth = [og.solve(pb, N=N, scheme="order4").cost for N in (16, 32)]
     assert np.all(observed_orders([c - exact for c in fourth]) >= 3.8), fourth

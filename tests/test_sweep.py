@@ -100,7 +100,7 @@ def solo_cost(values: dict[str, Any]) -> tuple[bool, float]:
     cfg = files.load(SO3, SETS + [f"{k}={yaml_text(v)}" for k, v in values.items()])
     f, d = cfg.file, cfg.file.discretization
     sol = og.compile(files.build(cfg), f.horizon.N, d.retraction, d.rule, f.solver.ipopt,
-                     d.scheme).solve(replay=False)
+                     d.scheme).solve()
     return sol.success, sol.cost
 
 

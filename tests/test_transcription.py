@@ -24,9 +24,9 @@ def free_end_velocity() -> og.Problem:
                                      rolling])
 @pytest.mark.parametrize("scheme", og.nlp.SCHEME_NAMES)
 def test_every_variable_is_used_and_licq_holds(factory, scheme: str) -> None:
-    solver = og.compile(factory(), N=12, scheme=scheme)
+    solver = og.compile(factory(), N=16, scheme=scheme)
     tr = solver.transcription
-    sol = solver.solve(multistart=factory is rolling, replay=False)
+    sol = solver.solve(multistart=factory is rolling)
     if scheme in og.nlp.schemes.BASELINES:  # solved, but a quaternion drifts off SO(3)
         failures = sol.diagnostics["verdict"]["failures"]
         assert sol.status == "Solve_Succeeded" and all(

@@ -246,7 +246,7 @@ def test_solve_plot_under_a_file_is_exit_2_in_a_real_process(tmp_path: Path) -> 
 
 def test_good_outputs_are_written_with_the_umask_mode(tmp_path: Path, umask_022) -> None:
     out = tmp_path / "new" / "sol.json"
-    r = runner.invoke(app, ["solve", str(SO3), "-q", "--set", "horizon.N=8", "--out", str(out)])
+    r = runner.invoke(app, ["solve", str(SO3), "-q", "--set", "horizon.N=16", "--out", str(out)])
     assert r.exit_code == 0, r.output
     assert stat.S_IMODE(out.stat().st_mode) == 0o644
 
@@ -258,7 +258,7 @@ def test_a_write_that_fails_after_the_solve_is_one_line(tmp_path: Path, monkeypa
     monkeypatch.setattr(importlib.import_module("ocgroupoid.solve.solution"), "write_atomic",
                         full)
     out = tmp_path / "sol.json"
-    r = runner.invoke(app, ["solve", str(SO3), "-q", "--set", "horizon.N=8", "--out", str(out)])
+    r = runner.invoke(app, ["solve", str(SO3), "-q", "--set", "horizon.N=16", "--out", str(out)])
     assert r.exit_code == 2, r.output
     assert "No space left on device" in one_line(r.output) and "Traceback" not in r.output
 
@@ -282,7 +282,7 @@ def test_plot_checks_its_path_before_drawing(tmp_path: Path) -> None:
     import ocgroupoid as og
 
     sol = tmp_path / "sol.json"
-    assert runner.invoke(app, ["solve", str(SO3), "-q", "--set", "horizon.N=8", "--set",
+    assert runner.invoke(app, ["solve", str(SO3), "-q", "--set", "horizon.N=16", "--set",
                                "solver.multistart=false", "--out", str(sol)]).exit_code == 0
     regular = tmp_path / "regular.txt"
     regular.write_text("x")

@@ -2,8 +2,10 @@
 
 A name is a control (``u1``, ``f``), a control of its own with all its components
 (``tau``), ``u`` for all the controls, a velocity (``Omega``, ``dtheta``)
-or the state of an R^n factor (``theta``, ``xy``). A value is one pair for every component,
-``[-1, 1]``, or one pair per component, ``[[-1, 1], [null, 2]]``; ``null`` leaves a side open.
+or the state of an R^n factor (``theta``, ``xy``), or one component or a slice of any of
+these (``xi[0]``, ``Omega[1:3]``). A value is one pair for every component, ``[-1, 1]``, or
+one pair per component, ``[[-1, 1], null, [null, 2]]``; ``null`` leaves a side open, and a
+``null`` pair leaves that component unbounded.
 A side may be an expression of the parameters, ``[-umax, umax]`` with ``umax`` in
 ``parameters:``: it changes without a rebuild (and is a runtime parameter of the C export).
 Each entry becomes :meth:`Problem.bound`, imposed wherever the scheme evaluates its
@@ -12,6 +14,7 @@ constraints.
 
 from __future__ import annotations
 
+import re
 from typing import Any, Callable
 
 import casadi as ca
@@ -22,8 +25,13 @@ from ..model.values import number
 from .expressions import CONSTANTS, compile_expression
 
 
+_COMPONENT = re.compile(r"\s*([A-Za-z_]\w*)\s*\[\s*([-+]?\d+)?\s*(?::\s*([-+]?\d+)?\s*)?\]\s*")
+
+
 def expression(pb: Problem, name: str) -> ca.SX:
     """The expression a bounds key names (module docstring)."""
+    if "[" in name:
+        return _component(pb, name)
     controls = dict(pb.controls)
     if name in controls:
         return controls[name]
@@ -47,6 +55,26 @@ def expression(pb: Problem, name: str) -> ca.SX:
     raise ConfigError(f"unknown name {name!r}; bounds apply to {', '.join(known) or 'nothing'}")
 
 
+def _component(pb: Problem, name: str) -> ca.SX:
+    """``xi[0]``, ``Omega[1:3]``: a component or a slice of what a name bounds."""
+    m = _COMPONENT.fullmatch(name)
+    if m is None or (m.group(2) is None and ":" not in name):
+        raise ConfigError(f"{name!r}: write a component as name[i] or a slice as name[i:j], "
+                          "e.g. xi[0] or Omega[0:2]")
+    base = expression(pb, m.group(1))
+    n = base.numel()
+    if ":" in name:
+        lo, hi = (int(v) if v is not None else None for v in (m.group(2), m.group(3)))
+        picked = list(range(n))[slice(lo, hi)]
+    else:
+        i = int(m.group(2))
+        picked = [i % n] if -n <= i < n else []
+    if not picked:
+        raise ConfigError(f"{name!r} selects no component: {m.group(1)} has {n} "
+                          f"(0..{n - 1})")
+    return base[picked]
+
+
 Side = float | ca.SX | None
 
 
@@ -68,18 +96,19 @@ def pairs(pb: Problem, value: Any, n: int, name: str) -> tuple[list[Side], list[
     if not isinstance(value, (list, tuple)) or not value:
         raise ConfigError(f"bounds.{name} is [lower, upper] or a list of such pairs, got "
                           f"{value!r}")
-    per = value if isinstance(value[0], (list, tuple)) else [value] * n
+    per = value if any(isinstance(v, (list, tuple)) for v in value) else [value] * n
+    per = [[None, None] if v is None else v for v in per]  # a null pair: unbounded
     if len(per) != n or any(not isinstance(v, (list, tuple)) or len(v) != 2 for v in per):
         raise ConfigError(f"bounds.{name} needs one [lower, upper] pair or {n} of them "
-                          f"(one per component), got {value!r}")
+                          f"(one per component, null for none), got {value!r}")
     lo = [side(pb, v[0], f"bounds.{name} lower") for v in per]
     hi = [side(pb, v[1], f"bounds.{name} upper") for v in per]
     for i, (a, b) in enumerate(zip(lo, hi)):
         if isinstance(a, float) and isinstance(b, float) and a > b:
             raise ConfigError(f"bounds.{name}: component {i} has lower {a} > upper {b}")
-        if a is None and b is None:
-            raise ConfigError(f"bounds.{name}: component {i} is open on both sides; drop it "
-                              "or give a side")
+    if all(a is None and b is None for a, b in zip(lo, hi)):
+        raise ConfigError(f"bounds.{name}: every component is open on both sides; drop the "
+                          "entry or give a side")
     return lo, hi
 
 
@@ -89,6 +118,9 @@ def apply(pb: Problem, bounds: dict[str, Any], where: Callable[..., str]) -> Non
         try:
             expr = expression(pb, name)
             lo, hi = pairs(pb, value, expr.numel(), name)
+            keep = [i for i, (a, b) in enumerate(zip(lo, hi)) if a is not None or b is not None]
+            if len(keep) < len(lo):  # null pairs: those components unbounded
+                expr, lo, hi = expr[keep], [lo[i] for i in keep], [hi[i] for i in keep]
             pb.bound(expr, lo, hi, name=name)
         except ConfigError as err:
             raise ConfigError(f"{where('bounds', name)}: {err}") from None

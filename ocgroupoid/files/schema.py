@@ -163,6 +163,9 @@ class DiscretizationSection(Strict):
     rule: str = Field("midpoint", description="discretisation rule of the constraints")
     steps: Literal["uniform", "adaptive"] = Field(
         "uniform", description="uniform steps h = T/N, or adaptive ones (order4)")
+    bound_points: int = Field(
+        0, ge=0, le=16, description="impose the bounds at this many more points inside every "
+        "interval (order4), where a bound is violated between the scheme's points")
 
 
 class SolverSection(Strict):

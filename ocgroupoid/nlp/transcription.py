@@ -27,6 +27,7 @@ import numpy as np
 
 from ..errors import BoundaryError, ConfigError
 from ..lie.retraction import RETRACTION_NAMES
+from ..model.consistency import check_order
 from ..model.problem import Boundary, Problem
 from ..model.values import check_horizon
 from .assembly import Block, Kind, assemble
@@ -81,6 +82,7 @@ BACKENDS = ("ipopt", "fatrop")
 DEFAULT_BACKEND = "ipopt"
 
 STEPS = ("uniform", "adaptive")
+MAX_BOUND_POINTS = 16
 #: adaptive steps stay within [STEP_RANGE[0], STEP_RANGE[1]] times the uniform step T/N
 STEP_RANGE = (0.1, 10.0)
 
@@ -99,6 +101,9 @@ class Discretization:
     scheme: str = DEFAULT_SCHEME
     steps: str = "uniform"
     phases: tuple[int, ...] = ()
+    #: bounds imposed at this many more points inside every interval (uniformly spaced),
+    #: beyond the scheme's own; order4 only
+    bound_points: int = 0
 
     def __post_init__(self) -> None:
         if not isinstance(self.N, int) or isinstance(self.N, bool) or self.N < 2:
@@ -113,6 +118,10 @@ class Discretization:
                               f"{', '.join(SCHEME_NAMES)}")
         if self.steps not in STEPS:
             raise ConfigError(f"steps are {' or '.join(STEPS)}, got {self.steps!r}")
+        if isinstance(self.bound_points, bool) or not isinstance(self.bound_points, int) or \
+                not 0 <= self.bound_points <= MAX_BOUND_POINTS:
+            raise ConfigError(f"bound_points is an integer in 0..{MAX_BOUND_POINTS} (more points "
+                              f"per interval where the bounds hold), got {self.bound_points!r}")
         if self.phases and (sum(self.phases) != self.N or min(self.phases) < 1):
             raise ConfigError(f"phases {self.phases} must be positive interval counts summing "
                               f"to N = {self.N}")
@@ -130,6 +139,9 @@ class Guess:
     x: np.ndarray | None = None
     lam_g: np.ndarray | None = None
     lam_x: np.ndarray | None = None
+    #: the horizon the velocities were made for (a coarser grid's solved T): a free horizon
+    #: starts there rather than at the problem's guess, so the path keeps its length
+    T: float | None = None
 
 
 @dataclass
@@ -172,8 +184,10 @@ class Transcription:
                               f"{', '.join(BACKENDS)}")
         if problem.cost is None:
             raise ConfigError(f"problem {problem.name!r} has no cost; call minimize()")
+        check_order(problem)
         self.problem, self.disc, self.N = problem, disc, disc.N
-        self.scheme = make_scheme(disc.scheme, problem, disc.N, disc.retraction, disc.rule)
+        self.scheme = make_scheme(disc.scheme, problem, disc.N, disc.retraction, disc.rule,
+                                  disc.bound_points)
         self.masks = Masks.of(problem.groupoid, problem.end_velocities, problem.start, problem.end)
         if disc.steps == "adaptive" and not self.scheme.adaptive_steps:
             raise ConfigError(
@@ -523,6 +537,9 @@ class Transcription:
         recursion needs every stage's reduced Hessian positive definite, and regularises until
         it is: slow or stuck on some nonconvex problems) IPOPT solves from the same start."""
         p = self.pack() if p is None else np.asarray(p, dtype=float)
+        if guess.T is not None and self.problem.T_free and guess.x is None:
+            p = p.copy()
+            p[self.layout.p_slices["T"]] = guess.T
         x0 = guess.x if guess.x is not None and guess.x.size == self.nx else self.point(guess, p)
         first = None
         if self.fatrop is not None:

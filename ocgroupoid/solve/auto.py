@@ -8,8 +8,9 @@ and meets the targets:
 
 * ``accuracy``: the relative cost error, estimated by Richardson from this grid and the
   previous one (:mod:`~ocgroupoid.solve.richardson`), ``|J_N - J_N/2| / (2^p - 1) / |J_N|``.
-  The order p is the scheme's (:attr:`~ocgroupoid.nlp.schemes.base.Scheme.accuracy`),
-  lowered to the order observed, so that a grid outside the asymptotic regime is never
+  The order p is the scheme's (:attr:`~ocgroupoid.nlp.schemes.base.Scheme.accuracy`), at
+  most 2 when bounds are active on uniform steps (a switch inside an interval), lowered to
+  the order observed, so that a grid outside the asymptotic regime is never
   trusted: the replay's terminal errors at both grids (the plan checked against the
   continuous dynamics) and, from the third grid on, the fall of the cost differences give
   it. An estimate never falls faster than the scheme's order from one grid to the next
@@ -157,6 +158,10 @@ def _estimate(prior: list[Level], sol: Solution, replay_error: float | None, nom
     the first grid, after a failed one, or where no convergence is observed."""
     if not prior or prior[-1].status != "Solve_Succeeded":
         return None
+    if sol.diagnostics.get("bounds_active") and sol.discretization.get("steps") != "adaptive":
+        # the active set switches inside intervals on a uniform grid: a control with a kink
+        # or a jump there converges at second order at best, whatever the scheme's order
+        nominal = min(nominal, 2)
     last = prior[-1]
     observed = {}
     if replay_error is not None and last.replay_error is not None:

@@ -78,7 +78,8 @@ def interpolate(coarse: Transcription, x: np.ndarray, p: np.ndarray, N: int) -> 
     t_c = (np.arange(coarse.N) + 0.5) * T / coarse.N
     t_f = (np.arange(N) + 0.5) * T / N
     return Guess(f"interpolated from N={coarse.N}",
-                 np.column_stack([np.interp(t_f, t_c, xi[:, j]) for j in range(xi.shape[1])]))
+                 np.column_stack([np.interp(t_f, t_c, xi[:, j]) for j in range(xi.shape[1])]),
+                 T=T)
 
 
 def as_guess(guess: Any, tr: Transcription, p: np.ndarray) -> Guess:
@@ -103,12 +104,12 @@ def as_guess(guess: Any, tr: Transcription, p: np.ndarray) -> Guess:
             raise ConfigError(f"guess: the solution of {guess.problem!r} has velocities of "
                               f"{V.shape[1]} components, this problem {dg}: pass a solution "
                               "of the same problem")
-        T = tr.horizon_of(p)
+        T = guess.T if tr.problem.T_free else tr.horizon_of(p)  # a free T starts at its
         mid = (np.arange(tr.N) + 0.5) / tr.N * T
         scaled = t * (T / guess.T) if guess.T > 0 else t  # onto this horizon
         xi = np.column_stack([np.interp(mid, scaled, V[:, j]) for j in range(dg)])
         return Guess(f"interpolated from a solution ({guess.discretization.get('scheme')}, "
-                     f"N={guess.N})", xi)
+                     f"N={guess.N})", xi, T=guess.T)
     if isinstance(guess, Guess):
         if guess.x is None and np.shape(guess.xi) != (tr.N, dg):
             raise ConfigError(f"guess {guess.label!r}: its velocities are shaped "

@@ -20,7 +20,7 @@ from ..nlp.transcription import RawResult, Transcription
 from .diagnostics import diagnose
 from .hints import hint_for
 from .solution import Solution
-from .verdict import REPLAY_TOLERANCE, check_tolerance, verdict
+from .verdict import REPLAY_TOLERANCE, check_tolerance, tolerances, verdict
 
 
 def make_solution(tr: Transcription, r: RawResult, minima: Sequence[Any],
@@ -54,7 +54,8 @@ def make_solution(tr: Transcription, r: RawResult, minima: Sequence[Any],
     failures = verdict(tr, r, out, diagnostics, ipopt, replay_tolerance)
     diagnostics["verdict"] = {"verified": r.success and not failures, "failures": failures,
                               "check_tolerance": check_tolerance(ipopt),
-                              "replay_tolerance": replay_tolerance}
+                              "replay_tolerance": replay_tolerance,
+                              "tolerances": tolerances(tr, out, r.p, replay_tolerance)}
     diagnostics["seconds"] = time.perf_counter() - t0
     hint = "; ".join(failures) if failures else hint_for(tr, r, out["steps"])
     T = tr.horizon(r.x, r.p)

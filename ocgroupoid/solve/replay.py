@@ -1,16 +1,25 @@
-"""Replay: the reported controls driven through the continuous dynamics.
+"""Replay: the plan driven through the continuous problem, and everything measured along it.
 
-Second-order problems with mechanics integrate ``M(q, y) dy/dt = F(u) - c(q, y)`` with
-``F_actuated = B u``; second-order problems whose controls are the accelerations integrate
-``dy/dt = u``; first-order problems whose controls are velocities solve the constraints
-``psi(q, y) = 0`` for the remaining velocities. States follow the reconstruction equations
-(``dR/dt = R hat(Omega)``, ...). Any other problem has no replay. The controls are the
-piecewise polynomial the scheme implies (``Solution.control_ppoly``): linear between node
-samples for ``order2``, cubic (second-order problems) or linear within each interval
-(first-order problems) for ``order4``. The integrator is RK4 compiled by CasADi and mapped
-over the pieces, its substeps doubled until its own error is negligible (:meth:`Replay.run`):
-a few milliseconds where SciPy's ``solve_ivp`` took seconds. A user replays a plan the same
-way with ``scipy.interpolate.PPoly`` and ``solve_ivp`` (tests do, and agree).
+What is driven, and through what:
+
+* second-order problems with mechanics: the controls through ``M(q, g, y) dy/dt = F(u) -
+  c(q, g, y)`` (the controlled Euler-Lagrange(-Poincare) equations; a force of controls of
+  their own, thrust along body z, as declared); second-order problems whose controls are the
+  accelerations: ``dy/dt = u``;
+* first-order problems whose controls are velocity components that the constraints
+  ``psi(q, y) = 0`` complete: the controls through that kinematics;
+* every other first-order problem: the plan's velocities themselves, through the
+  reconstruction ``g' = g y`` (``s' = state_rate(s, y)``), with the constraints ``psi``
+  checked along the integrated path (a no-slip or no-sideslip condition between the points
+  where the scheme imposes it).
+
+The input is the piecewise polynomial the scheme implies (``Solution.control_ppoly``; the
+velocities' for the last case: a constant or a line per interval through the velocity
+samples). Along the replay, on a dense grid (at least :data:`DENSE` samples per piece), the
+bounds are evaluated (the largest violation of each is the one a Solution reports), the
+constraints (last case) too, and the running cost is integrated (the cost recomputed from the
+plan). The integrator is RK4 compiled by CasADi and mapped over the pieces, its substeps
+doubled until its own error is negligible (:meth:`Replay.run`).
 """
 
 from __future__ import annotations
@@ -24,7 +33,9 @@ from ..nlp.dynamics import Dynamics, rk4
 from ..nlp.transcription import Transcription
 
 #: RK4 substeps per piece: the first pair compared, and the most ever taken
-SUBSTEPS = (1, 256)
+SUBSTEPS = (4, 256)
+#: at least this many samples of the bounds and constraints per piece
+DENSE = 8
 REL_TOL, ABS_TOL = 1e-3, 1e-12  # the replay's own error, against what it reports
 
 
@@ -50,21 +61,69 @@ def terminal_errors(tr: Transcription, s: np.ndarray, y: np.ndarray | None, p: n
     return out
 
 
+def velocity_ppoly(out: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """The velocities a first-order plan implies as a PPoly: on each interval the polynomial
+    through its velocity samples (one: a constant, the midpoint rule's; two: a line, the
+    Gauss stages')."""
+    t, tv, V = out["t"], out["velocity_t"], out["velocities"]
+    pieces = t.size - 1
+    k = max(1, tv.size // pieces)
+    C = np.zeros((k, pieces, V.shape[1]))
+    for j in range(pieces):
+        ts, vs = tv[j * k:(j + 1) * k] - t[j], V[j * k:(j + 1) * k]
+        C[:, j, :] = np.linalg.solve(np.vander(ts, k), vs) if k > 1 else vs
+    return {"x": t, "c": C}
+
+
 class Replay:
-    """Continuous dynamics of a problem, driven by sampled controls (module docstring)."""
+    """The continuous problem driven by the plan (module docstring)."""
 
     def __init__(self, tr: Transcription) -> None:
         self.tr = tr
-        dynamics = Dynamics(tr.problem, tr.scheme.stages)
-        #: ``rhs(z, u, P) -> dz/dt``, z the node state (and the velocity, second order)
-        self.rhs: ca.Function | None = dynamics.rhs
+        pb, G = tr.problem, tr.problem.groupoid
+        stages = tr.scheme.stages
+        dynamics = Dynamics(pb, stages)
         self.reason = dynamics.reason
+        #: what drives the replay: "controls" (dynamics or kinematics), "velocities" (a
+        #: first-order plan's velocities through the reconstruction) or "" (nothing can)
+        self.input = "controls" if dynamics.rhs is not None else \
+            "velocities" if pb.order == 1 else ""
+        s, y = ca.SX.sym("s", G.state_size), ca.SX.sym("y", G.algebra_dim)
+        #: ``rhs(z, v, P) -> dz/dt`` and ``(L, H, psi)(z, v, P)``: the running cost, the bounds'
+        #: expressions and (velocity input) the constraints along the replay
+        self.rhs: ca.Function | None = None
+        self.along: ca.Function | None = None
+        quantities = [stages.running_cost(), stages.inequalities]
+        psi = stages.constraints if self.input == "velocities" else ca.SX(0, 1)
+        if self.input == "controls":
+            assert dynamics.rhs is not None
+            self.rhs = dynamics.rhs
+            u = dynamics.u
+            if dynamics.second:
+                z = ca.vertcat(s, y)
+                assert dynamics.acceleration is not None
+                dy = dynamics.acceleration(s, y, u, pb.P)
+                vals = stages.at(quantities, s, y, dy, u)
+            else:
+                z = s
+                assert dynamics.velocity is not None
+                vals = stages.at(quantities, s, dynamics.velocity(s, u, pb.P))
+            self.along = ca.Function("along", [z, u, pb.P], [*vals, psi])
+        elif self.input == "velocities":
+            self.rhs = ca.Function("rhs", [s, y, pb.P], [G.state_rate(s, y)])
+            vals = stages.at([*quantities, psi], s, y)
+            self.along = ca.Function("along", [s, y, pb.P], vals)
+            self.reason = ""
+        bounds = stages.inequality_bounds()
+        self.sides = ca.Function("sides", [pb.P], list(bounds) if bounds else
+                                 [ca.SX(0, 1), ca.SX(0, 1)])
+        self.names = stages.inequality_names
         self._cache: dict[tuple[int, ...], ca.Function] = {}
 
     def run(self, out: dict[str, np.ndarray], ppoly: dict[str, np.ndarray], p: np.ndarray
             ) -> dict[str, Any]:
-        """Integrate from the read-out's initial state, piece by piece of the control
-        polynomial; return the final state's errors against the targets of p.
+        """Integrate from the read-out's initial state, piece by piece of the input polynomial;
+        return what was measured (module docstring).
 
         RK4 with M substeps per piece, compiled and mapped over the pieces, M doubled until
         two successive results agree (their difference, /15, estimates the error of the
@@ -73,52 +132,105 @@ class Replay:
         if self.rhs is None:
             return {"available": False, "reason": self.reason}
         tr = self.tr
+        if self.input == "velocities":
+            ppoly = velocity_ppoly(out)
         breaks, C = np.asarray(ppoly["x"], dtype=float), np.asarray(ppoly["c"], dtype=float)
         k, n, m = C.shape  # (k, pieces, m), highest power first
         P = tr.part(p, "P")
         ns = tr.problem.groupoid.state_size
-        second = tr.problem.end_velocities  # the state carries the velocities too
+        second = tr.problem.end_velocities and self.input == "controls"
         z0 = np.concatenate([out["node_states"][0], out["velocities"][0]]) if second else \
             out["node_states"][0].copy()
+        z0 = np.concatenate([z0, [0.0]])  # the running cost, integrated alongside
         coeffs = C.transpose(0, 2, 1).reshape(k * m, n)  # column j: piece j, m fastest
         args = (z0, coeffs, np.diff(breaks)[None, :], np.repeat(P[:, None], n, axis=1))
         M = SUBSTEPS[0]
-        previous = np.asarray(self._pieces(k, m, M, n)(*args))[:, -1]
+        previous = np.asarray(self._pieces(k, m, M, n)(*args)[0])[:, -1]
         while True:
             M *= 2
-            z = np.asarray(self._pieces(k, m, M, n)(*args))[:, -1]
-            estimate = float(np.max(np.abs(z - previous))) / 15.0
+            zs, H, psi = (np.asarray(v) for v in self._pieces(k, m, M, n)(*args))
+            z = zs[:, -1]
+            estimate = float(np.max(np.abs(z[:-1] - previous[:-1]))) / 15.0
             z = z + (z - previous) / 15.0
             if not np.all(np.isfinite(z)):
                 return {"available": False, "reason": "the replayed state diverged (not finite)"}
-            errors = terminal_errors(tr, z[:ns], z[ns:] if second else None, p)
+            errors = terminal_errors(tr, z[:ns], z[ns:-1] if second else None, p)
             worst = max(errors.values()) if errors else 0.0
             if estimate <= max(REL_TOL * worst, ABS_TOL) or M >= SUBSTEPS[1]:
                 break
             previous = z
-        return {"available": True, "terminal_error": errors, "max_terminal_error": worst,
-                "integration_error": estimate, "substeps": M}
+        report = {"available": True, "input": self.input, "terminal_error": errors,
+                  "max_terminal_error": worst, "integration_error": estimate, "substeps": M,
+                  "final_state": z[:-1].tolist(), "running_cost": float(z[-1])}
+        report.update(self._violations(H, P))
+        if psi.size:
+            report["constraint_residual_max"] = float(np.max(psi))
+        return report
+
+    def _violations(self, H: np.ndarray, P: np.ndarray) -> dict[str, Any]:
+        """The largest violation of every bound along the replay (H: per bound row, the
+        largest excess over its upper side and its lower side, per piece)."""
+        if not H.size:
+            return {}
+        lo, hi = (np.array(v).ravel() for v in self.sides(P))
+        rows = H.shape[0] // 2
+        over = np.max(H[:rows], axis=1) - hi
+        under = lo - np.min(H[rows:], axis=1)
+        worst = np.maximum(0.0, np.maximum(np.nan_to_num(over, nan=np.inf, neginf=0.0),
+                                           np.nan_to_num(under, nan=np.inf, neginf=0.0)))
+        per: dict[str, float] = {}
+        for name, v in zip(self.names, worst):
+            per[name] = max(per.get(name, 0.0), float(v))
+        return {"bound_violation": per, "bound_violation_max": float(np.max(worst)),
+                "bound_samples": DENSE}
 
     def _pieces(self, k: int, m: int, M: int, n: int) -> ca.Function:
-        """``(z0, coefficients (k m x n), steps (1 x n), P) -> z`` after every piece: M RK4
-        substeps per piece, the control evaluated by Horner's rule in t - t_j."""
+        """``(z0, coefficients (k m x n), steps (1 x n), P) -> (z, H, psi)``: z after every
+        piece (M RK4 substeps, the input evaluated by Horner's rule in t - t_j, the running
+        cost as the last state), and per piece the largest and smallest value of every bound
+        expression (stacked) and the largest |psi| over max(M, DENSE) + 1 samples."""
         key = (k, m, M, n)
         if key not in self._cache:
-            assert self.rhs is not None
+            assert self.rhs is not None and self.along is not None
             nz = self.rhs.size1_in(0)
-            z, c, h, P = (ca.SX.sym(n, d) for n, d in (("z", nz), ("c", k * m), ("h", 1),
+            z, c, h, P = (ca.SX.sym(n, d) for n, d in (("z", nz + 1), ("c", k * m), ("h", 1),
                                                         ("P", self.rhs.size1_in(2))))
             cm = ca.reshape(c, m, k)
 
-            def f(zz: ca.SX, t: ca.SX) -> ca.SX:
+            def u_at(t: ca.SX) -> ca.SX:
                 u = cm[:, 0]
                 for j in range(1, k):
                     u = u * t + cm[:, j]
-                return self.rhs(zz, u, P)
+                return u
+
+            def f(zz: ca.SX, t: ca.SX) -> ca.SX:
+                u = u_at(t)
+                L = self.along(zz[:nz], u, P)[0]
+                return ca.vertcat(self.rhs(zz[:nz], u, P), L)
 
             dt, zz = h / M, z
             for i in range(M):
                 zz = rk4(lambda x, s, t=i * dt: f(x, t + s * dt), zz, dt)
-            piece = ca.Function("piece", [z, c, h, P], [zz])
+            # samples of the bounds and constraints: on a grid of max(M, DENSE) steps
+            S = max(M, DENSE)
+            ds, zs = h / S, z
+            samples = [self.along(zs[:nz], u_at(0), P)]
+            for i in range(S):
+                zs = rk4(lambda x, s, t=i * ds: f(x, t + s * ds), zs, ds)
+                samples.append(self.along(zs[:nz], u_at((i + 1) * ds), P))
+            Hs = ca.horzcat(*[v[1] for v in samples])
+            psis = ca.horzcat(*[ca.fabs(v[2]) for v in samples])
+            nH = Hs.size1()
+            H = ca.vertcat(_rowmax(Hs), -_rowmax(-Hs)) if nH else ca.SX(0, 1)
+            psi = ca.mmax(psis) if psis.numel() else ca.SX(0, 1)
+            piece = ca.Function("piece", [z, c, h, P], [zz, H, psi])
             self._cache[key] = piece.mapaccum(n)
         return self._cache[key]
+
+
+def _rowmax(A: ca.SX) -> ca.SX:
+    """The largest entry of every row of A."""
+    out = A[:, 0]
+    for j in range(1, A.size2()):
+        out = ca.fmax(out, A[:, j])
+    return out

@@ -161,7 +161,10 @@ class Solution:
 
     @staticmethod
     def from_json(source: str | Path) -> "Solution":
-        """Read a solution from JSON text or from a file path."""
+        """Read a solution from JSON text or from a file path. ``success`` is read as
+        verified only when the file also carries a verdict that says so
+        (``diagnostics.verdict.verified``): a file whose ``success`` stands alone (a solver's
+        status, an edited file) is never upgraded to a verified Solution."""
         text = str(source)
         if not text.lstrip().startswith("{"):
             text = Path(source).read_text()
@@ -170,8 +173,14 @@ class Solution:
         vels = dict(d.get("velocities", {"t": []}))
         ctrl = d["controls"]
         arr = lambda v: np.array(v, dtype=float)  # noqa: E731  (None -> nan)
+        verdict = (d.get("diagnostics") or {}).get("verdict") or {}
+        verified = d.get("success") is True and verdict.get("verified") is True
+        hint = d.get("hint", "")
+        if d.get("success") is True and not verified:
+            hint = "; ".join(filter(None, ["the file carries no verdict that verifies it "
+                                           "(diagnostics.verdict): read as not verified", hint]))
         return Solution(
-            problem=d["problem"], success=bool(d["success"]), status=d["status"], N=int(d["N"]),
+            problem=d["problem"], success=verified, status=d["status"], N=int(d["N"]),
             T=float(d["T"]), cost=float("nan") if d["cost"] is None else float(d["cost"]),
             iterations=int(d["stats"]["iterations"]),
             solve_seconds=float(d["stats"]["solve_seconds"]),
@@ -189,7 +198,7 @@ class Solution:
                            ctrl.get("ppoly", {}).items()},
             diagnostics=d.get("diagnostics", {}), minima=d.get("minima", []),
             manifolds=dict(d.get("manifolds", {})), labels=dict(d.get("labels", {})),
-            hint=d.get("hint", ""), x=np.array(d.get("nlp", {}).get("x", []), dtype=float),
+            hint=hint, x=np.array(d.get("nlp", {}).get("x", []), dtype=float),
             p=np.array(d.get("nlp", {}).get("p", []), dtype=float),
             lam_g=np.array(d.get("nlp", {}).get("lam_g", []), dtype=float),
             lam_x=np.array(d.get("nlp", {}).get("lam_x", []), dtype=float),

@@ -23,9 +23,10 @@ from ..nlp.watch import Listener
 from . import mesh, richardson
 from .guesses import as_guess, geodesic_guesses, interpolate, model_guesses, perturbed_guesses
 from .interrupt import Interrupt, interruptible
-from .readout import make_solution
+from .diagnostics import replay_of
+from .readout import control_ppoly, make_solution
 from .solution import Solution
-from .verdict import REPLAY_TOLERANCE
+from .verdict import REPLAY_TOLERANCE, scales
 
 Progress = Callable[[str], None]
 #: a further start of a multi-start gets max(a, b x the first start's) iterations: one that
@@ -93,11 +94,12 @@ class Solver:
     def __init__(self, problem: Problem, N: int, retraction: str = "cayley",
                  rule: str = DEFAULT_RULE, ipopt: dict[str, Any] | None = None,
                  scheme: str = DEFAULT_SCHEME, steps: str = "uniform", jit: bool = False,
-                 backend: str = DEFAULT_BACKEND) -> None:
+                 backend: str = DEFAULT_BACKEND, *, bound_points: int = 0) -> None:
         self.problem = problem
         self.ipopt = dict(ipopt or {})
         self.jit, self.backend = jit, backend
-        self.disc = Discretization(N, retraction, rule, scheme, steps)
+        self.disc = Discretization(N, retraction, rule, scheme, steps,
+                                   bound_points=bound_points)
         self.transcription = Transcription(problem, self.disc, self.ipopt, jit, backend)
         self._coarse: dict[int, Transcription] = {}
         self._phased: dict[tuple[int, ...], Transcription] = {}
@@ -164,6 +166,7 @@ class Solver:
         prev: tuple[Transcription, RawResult] | None = None
         coarse = prev  # the grid solved before the last one (continuation)
         notes: list[str] = []  # continuation grids that landed above a coarser minimum
+        adaptive: dict[str, Any] = {}
         with interruptible() as interrupt:
             for n in [*levels, self.disc.N]:
                 tr = self._at(n)
@@ -199,10 +202,13 @@ class Solver:
             if interrupt.requested:
                 best = replace(best, status="interrupted", success=False)
             elif self.disc.steps == "adaptive" and best.success:
-                tr, best = self._adapt(tr, best, params, initial, final, progress)
+                tr, best, adaptive = self._adapt(tr, best, params, initial, final, progress)
         progress("diagnostics")
         solution = make_solution(tr, best, distinct_minima(results), replay, self.ipopt,
                                  replay_tolerance)
+        if self.disc.steps == "adaptive" and not interrupt.requested and best.success:
+            solution.diagnostics["adaptive"] = adaptive
+            solution.discretization["steps"] = "adaptive" if adaptive["used"] else "uniform"
         if notes:
             solution.diagnostics["continuation"] = notes
             solution = replace(solution, hint="; ".join([*notes, *filter(None, [solution.hint])]))
@@ -247,13 +253,18 @@ class Solver:
 
     def _adapt(self, tr: Transcription, r: RawResult, params: dict[str, Any] | None,
                initial: dict[str, Any] | None, final: dict[str, Any] | None,
-               progress: Progress) -> tuple[Transcription, RawResult]:
+               progress: Progress) -> tuple[Transcription, RawResult, dict[str, Any]]:
         """Adaptive steps: the phases between the switches of the uniform solution r
-        (:mod:`ocgroupoid.solve.mesh`), their durations solved for; r if nothing switches
-        or the phased solve fails."""
+        (:mod:`ocgroupoid.solve.mesh`), their durations solved for. The phased solution is
+        kept only when it solved and its plan lands at least as well as the uniform one's
+        (driven through the continuous problem: a mesh that stretches an arc over a few long
+        steps can shorten the discrete T below the optimum, and the replay shows it);
+        otherwise r, and the report (``diagnostics["adaptive"]``) says why."""
         phases = mesh.phases(tr, r)
+        report: dict[str, Any] = {"used": False, "phases": list(phases)}
         if len(phases) < 2:
-            return tr, r
+            report["reason"] = "no switch of the bounds' active set: uniform steps kept"
+            return tr, r, report
         progress(f"adaptive steps: phases of {', '.join(map(str, phases))} intervals")
         if phases not in self._phased:
             self._phased[phases] = Transcription(self.problem, replace(self.disc, phases=phases),
@@ -261,7 +272,35 @@ class Solver:
         phased = self._phased[phases]
         p = phased.pack(params, initial, final, tr.horizon(r.x, r.p))
         result = phased.solve(interpolate(tr, r.x, r.p, self.disc.N), p)
-        return (phased, result) if result.success else (tr, r)
+        if not result.success:
+            report["reason"] = f"the phased solve ended {result.status}: uniform steps kept"
+            return tr, r, report
+        miss = {"uniform": landing(tr, r), "adaptive": landing(phased, result)}
+        report["landing"] = miss
+        if miss["adaptive"] > 1.1 * miss["uniform"] + LANDING_FLOOR:
+            report["reason"] = (f"the phased plan lands worse than the uniform one "
+                                f"({miss['adaptive']:.2g} against {miss['uniform']:.2g} of the "
+                                "distance covered): uniform steps kept")
+            return tr, r, report
+        report["used"] = True
+        report["steps"] = [float(v) for v in result.x[phased.layout.phase_steps] / self.disc.N]
+        return phased, result, report
+
+
+#: landing misses (fractions of the distance covered) below this are exact for the comparison
+LANDING_FLOOR = 1e-10
+
+
+def landing(tr: Transcription, r: RawResult) -> float:
+    """The largest miss of a solved point's plan, driven through the continuous problem, as a
+    fraction of the distance each quantity covers (inf when it cannot be driven)."""
+    out = tr.readout(r.x, r.p, r.lam_g)
+    rep = replay_of(tr).run(out, control_ppoly(out), r.p)
+    if not rep.get("available"):
+        return float("inf")
+    scale = scales(tr, out, r.p)
+    return max((e / max(scale.get(n, 0.0), 1e-12) for n, e in rep["terminal_error"].items()),
+               default=0.0)
 
 
 #: a continued grid whose cost exceeds the coarser grid's minimum by more than this fraction
@@ -281,19 +320,21 @@ def _higher(fine: RawResult, coarse: RawResult, gap: float) -> bool:
 
 def compile(problem: Problem, N: int = 64, retraction: str = "cayley", rule: str = DEFAULT_RULE,
             ipopt: dict[str, Any] | None = None, scheme: str = DEFAULT_SCHEME,
-            steps: str = "uniform", jit: bool = False, backend: str = DEFAULT_BACKEND
-            ) -> Solver:
+            steps: str = "uniform", jit: bool = False, backend: str = DEFAULT_BACKEND, *,
+            bound_points: int = 0) -> Solver:
     """Build the NLP of ``problem`` on N intervals once; see :class:`Solver`. ``steps``:
     ``uniform`` (h = T/N) or ``adaptive`` (one step per interval, summing to T); ``jit``:
     evaluate the NLP's Functions as compiled C (:mod:`~ocgroupoid.nlp.jit`); ``backend``:
-    ``ipopt`` or ``fatrop`` (the stage form, :mod:`~ocgroupoid.nlp.fatrop`)."""
-    return Solver(problem, N, retraction, rule, ipopt, scheme, steps, jit, backend)
+    ``ipopt`` or ``fatrop`` (the stage form, :mod:`~ocgroupoid.nlp.fatrop`);
+    ``bound_points``: the bounds at this many more points inside every interval (order4)."""
+    return Solver(problem, N, retraction, rule, ipopt, scheme, steps, jit, backend,
+                  bound_points=bound_points)
 
 
 def solve(problem: Problem, N: int = 64, retraction: str = "cayley", rule: str = DEFAULT_RULE,
           ipopt: dict[str, Any] | None = None, scheme: str = DEFAULT_SCHEME,
           steps: str = "uniform", jit: bool = False, backend: str = DEFAULT_BACKEND,
-          **kwargs: Any) -> Solution:
+          bound_points: int = 0, **kwargs: Any) -> Solution:
     """Build and solve in one call; ``kwargs`` go to :meth:`Solver.solve`."""
-    return compile(problem, N, retraction, rule, ipopt, scheme, steps, jit, backend).solve(
-        **kwargs)
+    return compile(problem, N, retraction, rule, ipopt, scheme, steps, jit, backend,
+                   bound_points=bound_points).solve(**kwargs)

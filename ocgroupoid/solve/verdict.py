@@ -8,19 +8,28 @@ sentence per failed check in its hint (the CLI exits 1):
 2. The solution's own residuals are within :func:`check_tolerance` (``max(1e-6, 100 tol)``,
    ``tol`` IPOPT's): the discrete Euler-Lagrange residual with the solver's multipliers, the
    reconstruction and constraint residuals, the distance of the final state from its target,
-   the distance of every state from its manifold, the violation of the bounds.
+   the distance of every state from its manifold, the violation of the bounds at the points
+   where the scheme imposes them.
 3. No prescribed condition is implied by the others at the solution
    (:mod:`~ocgroupoid.solve.dependencies`): LICQ holds.
-4. The plan lands: the controls, replayed through the continuous dynamics
-   (:mod:`~ocgroupoid.solve.replay`), reach every prescribed final value to within
-   ``replay_tolerance`` (default :data:`REPLAY_TOLERANCE`, 5%) of the distance the
-   trajectory covers in it (a state: the length of its path, or the distance from its start
-   to its target if larger; a velocity: its largest magnitude). An under-resolved grid (steps
-   of radians, an extreme inertia ratio) gives a discrete answer that the continuous system
-   does not follow; this is where it is caught, with the grid to try. Where no replay exists
-   (or ``replay=False``), steps beyond half the retraction's singular step fail instead, and
-   a first-order problem's constraints are checked at the nodes, between the points where
-   the scheme imposes them (:func:`_between_points`).
+4. The plan was checked against the continuous problem (:mod:`~ocgroupoid.solve.replay`):
+   driven through it (the dynamics, the kinematics of its controls, or for a first-order plan
+   its velocities through ``g' = g y``), it reaches every prescribed final value to within
+   the landing tolerance, ``replay_tolerance`` (default :data:`REPLAY_TOLERANCE`) of the
+   distance the trajectory covers in it (a state: the length of its path, or the distance
+   from its start to its target if larger; a velocity: its largest magnitude); along it,
+   every bound holds to ``replay_tolerance`` of its size (on a dense grid: between the
+   points too) and, for a first-order plan driven by its velocities, the constraints hold to
+   ``replay_tolerance`` of the states' size. A problem with nothing to drive it (a
+   second-order problem without mechanics whose controls are not accelerations), or
+   ``replay=False``, is not verified: no success without a check.
+5. The retraction stayed where it is accurate: no step of the seeds' ``first_order`` rule
+   turns by more than :data:`FIRST_ORDER_RANGE` (its read-out ``sin`` of the angle lets a
+   long step turn further than it pays for).
+
+The Solution states what the check found: the tolerances (``diagnostics["verdict"]``), the
+largest bound violation along the replay (``bound_violation_max``) and an a-posteriori
+estimate of the cost's (and a free T's) error (``diagnostics["estimate"]``).
 """
 
 from __future__ import annotations
@@ -34,13 +43,14 @@ from ..nlp.transcription import DEFAULT_IPOPT, RawResult, Transcription
 from .dependencies import dependent_conditions
 from .replay import terminal_errors
 
-REPLAY_TOLERANCE = 0.05  # replay terminal error / distance covered
+REPLAY_TOLERANCE = 0.01  # replay terminal error / distance covered; bound violation / its size
+FIRST_ORDER_RANGE = 0.5  # rad: the first_order rule's read-out is accurate to ~4% up to here
 FLOOR = 1e-8  # absolute floor of the replay tolerance (a problem that stays at rest)
 RESIDUALS = {  # diagnostics key -> what it measures
     "euler_lagrange_residual_max": "discrete Euler-Lagrange residual",
     "reconstruction_residual_max": "reconstruction residual",
     "constraint_residual_max": "constraint residual",
-    "bound_violation_max": "bound violation",
+    "bound_violation_points": "bound violation at the points where the bounds are imposed",
 }
 
 
@@ -93,54 +103,96 @@ def verdict(tr: Transcription, r: RawResult, out: dict[str, np.ndarray],
     failures += dependent_conditions(tr, r.x, r.p)
     failures += tr.scheme.troubles(np.concatenate([r.x, r.p]))
     order = tr.scheme.accuracy
-    rep = d.get("replay", {})
-    if rep.get("available"):
-        scale = scales(tr, out, r.p)
-        worst = max(((e / (replay_tolerance * scale.get(n, 0.0) + FLOOR), n, e)
-                     for n, e in rep["terminal_error"].items()), default=(0.0, "", 0.0))
-        if worst[0] > 1.0:
-            failures.append(
-                f"the plan does not land: the controls replayed through the continuous "
-                f"dynamics miss final.{worst[1]} by {worst[2]:.2g} "
-                f"({worst[2] / max(scale[worst[1]], FLOOR):.1%} of the distance it covers, "
-                f"tolerance {replay_tolerance:.0%}): the grid is too "
-                f"coarse for this motion; increase N to {suggested_N(tr.N, worst[0], order)}")
+    rep = d.get("replay")
+    if rep is None:
+        failures.append("not verified: the plan was not checked against the continuous "
+                        "problem (replay=False); solve with the replay on")
+    elif not rep.get("available"):
+        failures.append(f"not verifiable: {rep.get('reason', 'no replay')} — nothing drives "
+                        "this plan through the continuous problem, so nothing confirms it")
     else:
-        if "replay" in d:  # the problem has no replay (not: replay=False)
-            failures += _between_points(tr, out, r.p, replay_tolerance)
-        for name, angle in d.get("step_angle_max", {}).items():
-            limit = next(ret.step_limit for f, ret in zip(tr.problem.groupoid.factors,
-                                                         tr.scheme.retractions)
-                         if f.velocity == name)
-            if angle > 0.5 * limit:
-                failures.append(f"{name} turns {angle:.3g} rad in one step (more than half of "
-                                f"{limit:.2f}, where {tr.scheme.retraction} is singular): "
-                                f"increase N to {suggested_N(tr.N, angle / (0.25 * limit), order)}")
+        failures += _landing(tr, out, r.p, rep, replay_tolerance, order)
+        failures += _along(tr, out, r.p, rep, replay_tolerance, order)
+    failures += _rule_range(tr, d, order)
     return failures
 
 
-def _between_points(tr: Transcription, out: dict[str, np.ndarray], p: np.ndarray,
-                    replay_tolerance: float) -> list[str]:
-    """Without a replay, the constraints Phi(q, y) of a first-order problem checked where the
-    scheme does not impose them: at the nodes, with the mean of the adjacent interval
-    velocities. A solution of the continuous problem meets them there to O(h^2); a discrete
-    artefact (a zigzag whose midpoints alone satisfy Phi, found when the continuous problem
-    has no solution) misses them by O(1). Tolerance: ``replay_tolerance`` times the size of
-    the states (at least 1)."""
-    pb, G = tr.problem, tr.problem.groupoid
-    if pb.order != 1 or not pb.constraints:
+def tolerances(tr: Transcription, out: dict[str, np.ndarray], p: np.ndarray,
+               replay_tolerance: float) -> dict[str, Any]:
+    """The absolute tolerances of item 4: per prescribed final value (landing), per bound
+    (``replay_tolerance`` of its largest finite side, at least of 1) and for the constraints
+    along a velocity-driven replay."""
+    scale = scales(tr, out, p)
+    landing = {n: float(replay_tolerance * v + FLOOR) for n, v in scale.items()}
+    out_b: dict[str, float] = {}
+    pb = tr.problem
+    if pb.inequalities:
+        lo, hi = (np.array(v).ravel() for v in
+                  ca.Function("sides", [pb.P], list(tr.scheme.stages.inequality_bounds()))(
+                      tr.part(p, "P")))
+        for name, a, b in zip(tr.scheme.stages.inequality_names, lo, hi):
+            size = max([abs(v) for v in (a, b) if np.isfinite(v)] + [1.0])
+            out_b[name] = float(replay_tolerance * size)
+    states = float(np.max(np.abs(out["node_states"]))) if out["node_states"].size else 1.0
+    return {"landing": landing, "bounds": out_b,
+            "constraints": float(replay_tolerance * max(1.0, states))}
+
+
+def _landing(tr: Transcription, out: dict[str, np.ndarray], p: np.ndarray,
+             rep: dict[str, Any], replay_tolerance: float, order: int) -> list[str]:
+    """Item 4: the replay reaches every prescribed final value within its tolerance."""
+    scale = scales(tr, out, p)
+    worst = max(((e / (replay_tolerance * scale.get(n, 0.0) + FLOOR), n, e)
+                 for n, e in rep["terminal_error"].items()), default=(0.0, "", 0.0))
+    if worst[0] <= 1.0:
         return []
-    S, V = out["node_states"], out["velocities"]
-    if len(V) != len(S) - 1:
-        return []
-    V = np.vstack([V[:1], (V[1:] + V[:-1]) / 2, V[-1:]])
-    s = ca.SX.sym("s", G.state_size)
-    phi = ca.vertcat(*[c for _, c in pb.constraints])
-    f = ca.Function("phi", [s, pb.y, pb.P], [ca.substitute(phi, pb.q, G.base(s))])
-    worst = float(np.max(np.abs(np.array(f.map(len(S))(S.T, V.T, tr.part(p, "P"))))))
-    tol = replay_tolerance * max(1.0, float(np.max(np.abs(S))))
-    if worst <= tol:
-        return []
-    return [f"the constraints hold only where the scheme imposes them: at the nodes they miss "
-            f"by {worst:.2g} (tolerance {tol:.2g}); the discrete answer is an artefact of the "
-            "grid — the conditions may be incompatible (check the final values), or increase N"]
+    return [(f"the plan does not land: driven through the continuous problem it misses "
+             f"final.{worst[1]} by {worst[2]:.2g} "
+             f"({worst[2] / max(scale[worst[1]], FLOOR):.2%} of the distance it covers, "
+             f"tolerance {replay_tolerance:.2%}): the grid is too coarse for this motion; "
+             f"increase N to {suggested_N(tr.N, worst[0], order)}")]
+
+
+def _along(tr: Transcription, out: dict[str, np.ndarray], p: np.ndarray,
+           rep: dict[str, Any], replay_tolerance: float, order: int) -> list[str]:
+    """Item 4: the bounds (and a velocity-driven plan's constraints) along the replay."""
+    tol = tolerances(tr, out, p, replay_tolerance)
+    failures = []
+    for name, v in rep.get("bound_violation", {}).items():
+        limit = tol["bounds"].get(name, replay_tolerance)
+        if v > limit:
+            failures.append(
+                f"bound {name} is violated by {v:.3g} between the points where it is imposed "
+                f"(along the replayed plan; tolerance {limit:.2g}): increase N to "
+                f"{suggested_N(tr.N, v / limit, order)}, or impose the bounds at more points "
+                "per interval (discretization.bound_points)")
+            break  # the worst is enough to act on; all are in diagnostics["bound_violation"]
+    psi = rep.get("constraint_residual_max")
+    if psi is not None and psi > tol["constraints"]:
+        failures.append(
+            f"the constraints hold only where the scheme imposes them: along the path the plan "
+            f"drives they miss by {psi:.2g} (tolerance {tol['constraints']:.2g}); the discrete "
+            f"answer is an artefact of the grid — the conditions may be incompatible (check "
+            f"the final values), or increase N to "
+            f"{suggested_N(tr.N, psi / tol['constraints'], order)}")
+    return failures
+
+
+def _rule_range(tr: Transcription, d: dict[str, Any], order: int) -> list[str]:
+    """Item 5: steps of the first_order rule beyond its accurate range, and steps beyond half
+    of any retraction's singular step."""
+    failures = []
+    for name, angle in d.get("step_angle_max", {}).items():
+        ret = next(ret for f, ret in zip(tr.problem.groupoid.factors, tr.scheme.retractions)
+                   if f.velocity == name)
+        if ret.name == "first_order" and angle > FIRST_ORDER_RANGE:
+            failures.append(f"{name} turns {angle:.3g} rad in one step, beyond the accurate "
+                            f"range of the first_order rule ({FIRST_ORDER_RANGE} rad: its "
+                            "read-out lets a long step turn further than it pays for): "
+                            f"increase N to {suggested_N(tr.N, angle / FIRST_ORDER_RANGE, 1)}"
+                            " or use the cayley retraction")
+        elif angle > 0.5 * ret.step_limit:
+            failures.append(f"{name} turns {angle:.3g} rad in one step (more than half of "
+                            f"{ret.step_limit:.2f}, where {tr.scheme.retraction} is singular): "
+                            f"increase N to {suggested_N(tr.N, angle / (0.25 * ret.step_limit), order)}")
+    return failures

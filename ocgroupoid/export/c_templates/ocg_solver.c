@@ -124,8 +124,15 @@ static const ocg_function ocg_f_nlpsol_warm = OCG_FUNCTION(ocg_gen_nlpsol_warm);
 static const ocg_function ocg_f_guess = OCG_FUNCTION(ocg_gen_guess);
 static const ocg_function ocg_f_pack = OCG_FUNCTION(ocg_gen_pack);
 static const ocg_function ocg_f_post = OCG_FUNCTION(ocg_gen_post);
+static const ocg_function ocg_f_verify = OCG_FUNCTION(ocg_gen_verify);
 static const ocg_function *const ocg_functions[] = {&ocg_f_nlpsol, &ocg_f_nlpsol_warm,
-                                                    &ocg_f_guess, &ocg_f_pack, &ocg_f_post};
+                                                    &ocg_f_guess, &ocg_f_pack, &ocg_f_post,
+                                                    &ocg_f_verify};
+/* The checks of ocg_gen_verify (ratios to their tolerances, each passes at <= 1) and the
+ * figures behind them, as Python's verdict (ocgroupoid.solve.verify_graph) names them. */
+static const char *const ocg_check_names[OCG_N_CHECKS] = OCG_CHECK_NAMES;
+static const char *const ocg_check_failures[OCG_N_CHECKS] = OCG_CHECK_FAILURES;
+static const char *const ocg_figure_names[OCG_N_FIGURES] = OCG_FIGURE_NAMES;
 #define OCG_N_FUNCTIONS (sizeof ocg_functions / sizeof ocg_functions[0])
 /* ocg_gen_post has OCG_N_POST outputs (ocg_model.h): OCG_X .. OCG_FINAL_MULTIPLIERS, then the
  * control polynomial's breakpoints and coefficients */
@@ -195,6 +202,7 @@ static int ocg_call(const ocg_function *f, const double *const *in, size_t n_in,
 
 struct ocg_result {
   int solved, status, success, iterations, warm;
+  double checks[OCG_N_CHECKS], figures[OCG_N_FIGURES]; /* the verdict (ocg_gen_verify) */
   double cost, seconds, residual;
   double p[OCG_NP], x_ipopt[OCG_NX], x_start[OCG_NX], g[OCG_NG + 1], lam_g[OCG_NG + 1];
   double lam_x[OCG_NX], lam_g_start[OCG_NG + 1], lam_x_start[OCG_NX];
@@ -327,8 +335,6 @@ static int ocg_run(const double *p, size_t n_p, const double *x0, size_t n_x0, i
   r->seconds = ocg_now() - t0;
   if (code != OCG_OK) return code;
   r->status = (int)ocg_last.status;
-  r->success = r->status == Solve_Succeeded || r->status == Solved_To_Acceptable_Level ||
-               r->status == Feasible_Point_Found;
   /* as the Python API: IPOPT reports no iterations when it stops before the first */
   r->iterations = r->status == Not_Enough_Degrees_Of_Freedom ? 0 : ocg_last.iterations;
   r->cost = f;
@@ -341,6 +347,18 @@ static int ocg_run(const double *p, size_t n_p, const double *x0, size_t n_x0, i
     code = ocg_call(&ocg_f_post, in, 3, r->post, OCG_N_POST, &r->work);
   }
   if (code != OCG_OK) return code;
+  {
+    const double *in[] = {r->x_ipopt, r->p, r->lam_g};
+    double *out[] = {r->checks, r->figures};
+    code = ocg_call(&ocg_f_verify, in, 3, out, 2, &r->work);
+  }
+  if (code != OCG_OK) return code;
+  /* success means verified, as in Python: the requested tolerance reached, and every check
+   * of the solution and of its plan replayed through the continuous problem within its
+   * tolerance (a NaN ratio, a problem nothing can replay, fails) */
+  r->success = r->status == Solve_Succeeded;
+  for (i = 0; i < OCG_N_CHECKS; ++i)
+    if (!(r->checks[i] <= 1.0)) r->success = 0;
   r->solved = 1;
   return r->success ? OCG_OK : OCG_NOT_SOLVED;
 }
@@ -560,7 +578,37 @@ int ocg_write_json(const ocg_result *r, FILE *out) {
   }
   fputs("},\n \"diagnostics\": {\"nlp_constraint_residual_max\": ", out);
   ocg_json_number(out, r->residual);
-  fputs("},\n \"nlp\": {\"x\": ", out);
+  for (i = 0; i < OCG_N_FIGURES; ++i) {
+    fputs(", ", out);
+    ocg_json_string(out, ocg_figure_names[i]);
+    fputs(": ", out);
+    ocg_json_number(out, r->figures[i]);
+  }
+  fprintf(out, ", \"verdict\": {\"verified\": %s, \"checks\": {",
+          r->success ? "true" : "false");
+  for (i = 0; i < OCG_N_CHECKS; ++i) {
+    if (i) fputs(", ", out);
+    ocg_json_string(out, ocg_check_names[i]);
+    fputs(": ", out);
+    ocg_json_number(out, r->checks[i]);
+  }
+  fputs("}, \"failures\": [", out);
+  {
+    int first = 1;
+    if (r->status != Solve_Succeeded) {
+      fputs("\"the solver stopped at ", out);
+      fputs(ocg_status_name(r), out);
+      fputs(", not at the requested tolerance\"", out);
+      first = 0;
+    }
+    for (i = 0; i < OCG_N_CHECKS; ++i) {
+      if (r->checks[i] <= 1.0) continue;
+      if (!first) fputs(", ", out);
+      ocg_json_string(out, ocg_check_failures[i]);
+      first = 0;
+    }
+  }
+  fputs("]}},\n \"nlp\": {\"x\": ", out);
   v = ocg_output(r, OCG_X, &rows, &cols);
   ocg_json_vector(out, v, cols);
   fputs(", \"p\": ", out);

@@ -23,14 +23,22 @@ SCHEME_NAMES = tuple(SCHEMES)
 DEFAULT_SCHEME = "order2"
 
 
-def make_scheme(name: str, problem: Problem, N: int, retraction: str, rule: str) -> Scheme:
-    """The scheme called ``name`` for ``problem`` (its class depends on the problem order)."""
+def make_scheme(name: str, problem: Problem, N: int, retraction: str, rule: str,
+                bound_points: int = 0) -> Scheme:
+    """The scheme called ``name`` for ``problem`` (its class depends on the problem order);
+    ``bound_points`` more points per interval where the bounds hold (order4 only)."""
     if name not in SCHEMES:
         raise ConfigError(f"unknown scheme {name!r}; choose one of {', '.join(SCHEME_NAMES)}")
     by_order = SCHEMES[name]
     if problem.order not in by_order:
         raise ConfigError(f"scheme {name!r} has no rule for order-{problem.order} problems")
-    return by_order[problem.order](problem, N, retraction, rule)
+    cls = by_order[problem.order]
+    if bound_points and not cls.adaptive_steps:
+        raise ConfigError(f"discretization.bound_points imposes the bounds at more points "
+                          f"inside order4's intervals; {name} evaluates them at its nodes: "
+                          "choose scheme order4, or increase N")
+    return cls(problem, N, retraction, rule, bound_points) if bound_points else \
+        cls(problem, N, retraction, rule)
 
 
 __all__ = ["Scheme", "Readout", "Node", "NodeMidpoint", "IntervalMidpoint", "QuadraticGauss",

@@ -112,14 +112,29 @@ def gauss_blocks(scheme: Scheme, sizes: list[int], idx: np.ndarray, point: str,
         call(*z)[:2])), idx, 1 + npar, Kind.PATH,
         [f"{n} ({point} {j + 1})" for j in range(2) for n in names], cols, times, points=2)]
     if pb.inequalities:
-        where = ["start", f"{point} 1", f"{point} 2", "end"]
+        bt = scheme.bound_times
+        named = {0.0: "start", float(GAUSS2[0]): f"{point} 1", float(GAUSS2[1]): f"{point} 2",
+                 1.0: "end"}
+        where = [named.get(float(c), f"at {c:.3g} of the interval") for c in bt]
         blocks.append(Block("interval_bounds", stage_function(
             "interval_bounds", sizes, lambda *z: (ca.SX(1, 1), call(*z)[2])), idx, 1 + npar,
             Kind.INEQUALITY, [f"{n} ({w})" for w in where
                               for n in scheme.stages.inequality_names], cols,
-            ((np.arange(N)[:, None] + BOUND_POINTS[None, :]) / N).ravel(), points=4,
-            bounds=scheme.stages.inequality_bounds(points=4)))
+            ((np.arange(N)[:, None] + bt[None, :]) / N).ravel(), points=bt.size,
+            bounds=scheme.stages.inequality_bounds(points=bt.size)))
     return blocks
+
+
+def bound_times(extra: int) -> np.ndarray:
+    """Where the bounds hold on an interval (fractions): :data:`BOUND_POINTS` and ``extra``
+    more, uniformly spaced inside (``discretization.bound_points``)."""
+    inside = np.arange(1, extra + 1) / (extra + 1)
+    return np.unique(np.concatenate([BOUND_POINTS, inside]))
+
+
+def lagrange(nodes: np.ndarray, tau: float) -> np.ndarray:
+    """The weights of the polynomial through values at ``nodes`` evaluated at ``tau``."""
+    return np.array([np.prod([(tau - b) / (a - b) for b in nodes if b != a]) for a in nodes])
 
 
 def _check_rule(problem: Problem, rule: str) -> None:
@@ -144,10 +159,12 @@ class QuadraticGauss(Scheme):
     Y: np.ndarray  # dim y x (N+1) node velocities (y_0 = V_0, y_N = V_N)
     B: np.ndarray  # dim y x N bubbles
 
-    def __init__(self, problem: Problem, N: int, retraction_name: str, rule: str) -> None:
+    def __init__(self, problem: Problem, N: int, retraction_name: str, rule: str,
+                 bound_points: int = 0) -> None:
         # the increments are exponential coordinates: tau(tau^-1(exp W)) = exp W for every
         # retraction, so the scheme steps with exp whatever the retraction asked for
         super().__init__(problem, N, "exp", rule)
+        self.bound_times = bound_times(bound_points)
         _check_rule(problem, rule)
         G, pb = problem.groupoid, problem
         ds, dg, nu = G.state_size, G.algebra_dim, self.stages.n_u
@@ -174,7 +191,7 @@ class QuadraticGauss(Scheme):
         # the controls at the bound points: their variables at the Gauss points, and at the
         # ends the controls that best explain the motion there (from the line through the
         # Gauss values): exact wherever Phi holds, like the recovered controls
-        u_at: dict[float, ca.SX | None] = {float(c): None for c in BOUND_POINTS}
+        u_at: dict[float, ca.SX | None] = {float(c): None for c in self.bound_times}
         if nu:
             assert self.stages.estimate is not None
             u1, u2 = ug[:nu], ug[nu:]
@@ -184,6 +201,11 @@ class QuadraticGauss(Scheme):
                 y, dy = quadratic(y0, y1, b, h, c)
                 u_at[c] = self.stages.estimate(G.step(s, self.retractions, theta(c)), y, dy,
                                                pb.P, line)
+            samples = [u_at[float(c)] for c in SAMPLES]
+            for c in self.bound_times:  # inside: the cubic the read-out reports
+                if u_at[float(c)] is None:
+                    w = lagrange(SAMPLES, float(c))
+                    u_at[float(c)] = sum(float(w[i]) * samples[i] for i in range(4))
 
         args = [s, y0, y1, b, ug, T, pb.P]
         names = ["s", "y0", "y1", "b", "u_gauss", "T", "P"]
@@ -195,7 +217,7 @@ class QuadraticGauss(Scheme):
         phi, ineq = self.stages.constraints, self.stages.inequalities
         Phi = ca.vertcat(*[h / 2 * at(phi, float(c), u_at[float(c)]) for c in GAUSS2]) \
             if phi.numel() else ca.SX(0, 1)
-        H = ca.vertcat(*[at(ineq, float(c), u_at[float(c)]) for c in BOUND_POINTS]) \
+        H = ca.vertcat(*[at(ineq, float(c), u_at[float(c)]) for c in self.bound_times]) \
             if ineq.numel() else ca.SX(0, 1)
         #: ``interval(s_k, y_k, y_{k+1}, b_k, u_k, T, P) -> (L_d, Phi_d, H)``: Phi_d stacks
         #: the two Gauss points, the bounds' expressions H the :data:`BOUND_POINTS`; u_k: the
@@ -335,9 +357,11 @@ class GaussStages(Scheme):
 
     eta: np.ndarray  # (2 dim y) x N: the stage coordinate rates of each interval
 
-    def __init__(self, problem: Problem, N: int, retraction_name: str, rule: str) -> None:
+    def __init__(self, problem: Problem, N: int, retraction_name: str, rule: str,
+                 bound_points: int = 0) -> None:
         super().__init__(problem, N, retraction_name, rule)
         _check_rule(problem, rule)
+        self.bound_times = bound_times(bound_points)
         G, pb = problem.groupoid, problem
         ds, dg = G.state_size, G.algebra_dim
         s, e1, e2, T = ca.SX.sym("s", ds), ca.SX.sym("eta1", dg), ca.SX.sym("eta2", dg), \
@@ -349,19 +373,24 @@ class GaussStages(Scheme):
         sub = [self.stages.at([self.stages.running_cost(), self.stages.constraints,
                                self.stages.controls, self.stages.inequalities],
                               G.step(s, self.retractions, xi[i]), y[i]) for i in range(2)]
-        # the ends of the interval, for the bounds: the collocation polynomial's rate (linear
-        # through the stage rates) at tau = 0 and 1
-        rate = [e1 + (e2 - e1) * (c - GAUSS2[0]) / (GAUSS2[1] - GAUSS2[0]) for c in (0.0, 1.0)]
-        Theta = h * (e1 + e2) / 2
-        ends = [self.stages.at([self.stages.inequalities], s, rate[0])[0],
-                self.stages.at([self.stages.inequalities], G.step(s, self.retractions, Theta),
-                               G.velocity_of_rate(self.retractions, Theta, rate[1]))[0]]
+        # elsewhere on the interval, for the bounds: the collocation polynomial, its rate
+        # linear through the stage rates and its coordinates that rate's integral
+        def elsewhere(c: float) -> ca.SX:
+            slope = (e2 - e1) / (GAUSS2[1] - GAUSS2[0])
+            rate = e1 + slope * (c - GAUSS2[0])
+            theta = h * (e1 * c + slope * ((c - GAUSS2[0]) ** 2 - GAUSS2[0] ** 2) / 2)
+            return self.stages.at([self.stages.inequalities], G.step(s, self.retractions, theta),
+                                  G.velocity_of_rate(self.retractions, theta, rate))[0]
+
+        stage_H = {float(GAUSS2[0]): sub[0][3], float(GAUSS2[1]): sub[1][3]}
+        H = ca.vertcat(*[stage_H.get(float(c), None) if float(c) in stage_H else elsewhere(
+            float(c)) for c in self.bound_times])
         args, names = [s, e1, e2, T, pb.P], ["s", "eta1", "eta2", "T", "P"]
         #: ``interval(s_k, eta_1, eta_2, T, P) -> (L_d, Phi_d, H)``: Phi_d at both stages, the
-        #: bounds' expressions H at :data:`BOUND_POINTS`
+        #: bounds' expressions H at :attr:`bound_times`
         self.interval = ca.Function("interval", args, [
             h / 2 * (sub[0][0] + sub[1][0]), ca.vertcat(h / 2 * sub[0][1], h / 2 * sub[1][1]),
-            ca.vertcat(ends[0], sub[0][3], sub[1][3], ends[1])], names, ["L", "Phi", "H"])
+            H], names, ["L", "Phi", "H"])
         #: ``stages(...) -> (y_1, y_2, u_1, u_2)``: velocities and controls at the stages
         self.stage_values = ca.Function("stage_values", args,
                                         [y[0], y[1], sub[0][2], sub[1][2]], names,
