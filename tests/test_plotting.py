@@ -8,10 +8,12 @@ solution file, the exported C solver's included; old files without labels still 
 from __future__ import annotations
 
 import json
+import re
 import shutil
 from pathlib import Path
 from typing import Any
 
+import casadi as ca
 import matplotlib
 import numpy as np
 import pytest
@@ -23,6 +25,8 @@ from ocgroupoid.cli import app
 from ocgroupoid.errors import ConfigError
 from ocgroupoid.export.codegen import export_c
 from ocgroupoid.models.rigid_body import rigid_body
+
+from .dubins_exact import CASES
 
 matplotlib.use("Agg")
 
@@ -57,6 +61,26 @@ def cart_pole() -> og.Solution:
     return solve_file("cart_pole")
 
 
+@pytest.fixture(scope="module")
+def unicycle() -> og.Solution:
+    """The Dubins car on SE(2), nothing described: unit forward speed, no sideslip, |ω| <= 1,
+    minimum time from the origin to the LSL case of :mod:`tests.dubins_exact`."""
+    pb = og.Problem(og.LieGroupFactor(og.SE2, state="g", velocity="xi"), name="dubins",
+                    order=1)
+    xi = pb.velocity("xi")  # (ω, v_x, v_y)
+    pb.subject_to(xi[1:] - ca.vertcat(1.0, 0.0), name="unicycle")
+    pb.bound(xi[0], -1.0, 1.0, name="turn")
+    pb.report_controls(xi[0], ["omega"])
+    pb.minimize_time()
+    (x, y, theta), _ = CASES["LSL"]
+    pb.initial(g=og.se2.from_spec({"angle": 0.0, "position": [0.0, 0.0]}))
+    pb.final(g=og.se2.from_spec({"angle": theta, "position": [x, y]}))
+    pb.horizon(6.0, free=True, T_min=1.0, T_max=20.0)
+    sol = og.solve(pb, N=16, scheme="order4")
+    assert sol.success, sol.status
+    return sol
+
+
 def axes_by_gid(fig: Any) -> dict[str, Any]:
     return {ax.get_gid(): ax for ax in fig.axes}
 
@@ -68,6 +92,20 @@ def legend_labels(ax: Any) -> list[str]:
 
 def lines(ax: Any, gid: str) -> list[Any]:
     return [ln for ln in ax.get_lines() if ln.get_gid() == gid]
+
+
+def data_scales(ax: Any) -> np.ndarray:
+    """Pixels per unit of x and of y as drawn (the axes' aspect is applied at drawing)."""
+    p = ax.transData.transform([[0.0, 0.0], [1.0, 1.0]])
+    return p[1] - p[0]
+
+
+def described(sol: og.Solution, name: str, meaning: str) -> og.Solution:
+    """A copy of a solution whose SE(2) state ``name`` is described as ``meaning``."""
+    copy = og.Solution.from_json(sol.to_json())
+    pose = {"meaning": meaning, "components": ["heading", "x", "y"], "units": ["rad", "m", "m"]}
+    copy.labels = {**copy.labels, "states": {**copy.labels.get("states", {}), name: pose}}
+    return copy
 
 
 def assert_no_empty_axes(fig: Any) -> None:
@@ -126,6 +164,60 @@ def test_plate_ball_draws_the_xy_path_with_start_and_target(plate_ball: og.Solut
     rolling = [a for a in fig.axes if a.get_gid().startswith("multipliers:rolling")]
     assert sum(len(legend_labels(a)) for a in rolling) == 3  # one entry per constraint row
     assert_no_empty_axes(fig)
+
+
+@pytest.mark.parametrize("case, stretch", [("unicycle", 1.0), ("unicycle", 20.0),
+                                           ("plate_ball", 1.0)])
+def test_paths_in_the_plane_are_drawn_on_equal_scales(case: str, stretch: float,
+                                                      request: pytest.FixtureRequest,
+                                                      tmp_path: Path) -> None:
+    """An arc is drawn as an arc of a circle: as many pixels per metre along x as along y
+    in the PNG written; a long, flat path (x stretched 20 times) widens the y range rather
+    than squash the y axis."""
+    sol = og.Solution.from_json(request.getfixturevalue(case).to_json())
+    if case == "unicycle":
+        sol.states["g"][:, 0, 2] *= stretch
+    fig = og.plot(sol, tmp_path / "path.png")  # drawn: the aspect is applied
+    (ax,) = [a for a in fig.axes if a.get_gid().startswith("path:")]
+    assert ax.get_aspect() == 1.0 and ax.get_adjustable() == "datalim"
+    px, py = data_scales(ax)
+    assert px == pytest.approx(py, rel=1e-9), (px, py)
+    (path,) = [ln for ln in ax.get_lines() if ln.get_gid() == ax.get_gid()]
+    (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+    assert x0 <= np.min(path.get_xdata()) and np.max(path.get_xdata()) <= x1
+    assert y0 <= np.min(path.get_ydata()) and np.max(path.get_ydata()) <= y1
+
+
+def test_the_unicycle_path_ends_on_the_dubins_goal(unicycle: og.Solution) -> None:
+    ax = axes_by_gid(og.plot(unicycle))["path:g"]
+    (x, y, _), _ = CASES["LSL"]
+    (start,), (target,) = lines(ax, "start"), lines(ax, "target")
+    np.testing.assert_allclose(np.ravel(start.get_data()), [0.0, 0.0], atol=1e-12)
+    np.testing.assert_allclose(np.ravel(target.get_data()), [x, y], atol=1e-8)
+    assert legend_labels(ax) == ["path", "start", "target"]
+
+
+@pytest.mark.parametrize("case", ["unicycle", "plate_ball", "slew"])
+def test_no_title_repeats_a_state_name(case: str, request: pytest.FixtureRequest) -> None:
+    """A title names a state once: by its meaning and symbol ("pose g"), by its symbol alone
+    when nothing is described ("g", not "g g"), also in a file written without labels."""
+    sol = request.getfixturevalue(case)
+    data = json.loads(sol.to_json())
+    data.pop("labels")
+    for version in (sol, og.Solution.from_json(json.dumps(data))):
+        for ax in og.plot(version).axes:
+            for name in sol.states:
+                said = re.findall(rf"(?<!\w){re.escape(name)}(?!\w)", ax.get_title())
+                assert len(said) <= 1, (name, ax.get_title())
+
+
+def test_planar_titles_name_the_state_by_its_meaning(unicycle: og.Solution) -> None:
+    titles = [a.get_title() for a in og.plot(unicycle).axes]
+    assert titles[:2] == ["g: path in the plane", "g: heading"]
+    titles = [a.get_title() for a in og.plot(described(unicycle, "g", "pose")).axes]
+    assert titles[:2] == ["pose g: path in the plane", "pose g: heading"]
+    titles = [a.get_title() for a in og.plot(described(unicycle, "g", "pose g of the car")).axes]
+    assert titles[:2] == ["pose g of the car: path in the plane", "pose g of the car: heading"]
 
 
 def test_bounds_are_drawn_on_bounded_controls(cart_pole: og.Solution) -> None:

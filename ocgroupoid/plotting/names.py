@@ -4,6 +4,7 @@ before it was recorded."""
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from typing import Any, Sequence
 
@@ -34,6 +35,15 @@ def with_unit(text: str, unit: str) -> str:
     if unit == "1":
         return f"{text} [-]"
     return f"{text} [{unit}]" if unit else text
+
+
+def called(meaning: str, name: str) -> str:
+    """How a title names the quantity ``name``: its meaning followed by its symbol ("attitude
+    R"), the meaning alone when it already holds the symbol as a word (an undescribed quantity's
+    meaning is its symbol: "g", never "g g")."""
+    if re.search(rf"(?<!\w){re.escape(name)}(?!\w)", meaning):
+        return meaning
+    return f"{meaning} {name}"
 
 
 def manifold(sol: Any, name: str) -> str:

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from .names import Names, Quantity, manifold, with_unit
+from .names import Names, Quantity, called, manifold, with_unit
 
 MISS = 1e-6  # rad: a final attitude or direction farther than this from its target is named
 TANGENT_DEFAULTS = {"SO(3)": ["about x", "about y", "about z"],
@@ -172,13 +172,14 @@ def error_panel(name: str, meaning: str, what: str, t: np.ndarray, angle: np.nda
     for a ``pose`` the norm of its log) is named in the title, without a star."""
     miss = names.final_miss(name)
     missed = whole and miss > MISS
+    who = called(meaning, name)
     if not whole:
-        title = f"{meaning} {name}: error to the final {what} reached (final {what} free)"
+        title = f"{who}: error to the final {what} reached (final {what} free)"
     elif missed:
         off = f"pose residual {miss:.2g}" if pose else f"{np.degrees(miss):.2g}° off"
-        title = f"{meaning} {name}: error to the final {what} reached ({off} the target)"
+        title = f"{who}: error to the final {what} reached ({off} the target)"
     else:
-        title = f"{meaning} {name}: error to the target"
+        title = f"{who}: error to the target"
     gid = f"{what}-error:{name}"
     curves = [Curve(t, np.degrees(angle), gid=gid)]
     if whole and not missed:
@@ -199,7 +200,7 @@ def state_panels(sol: Any, names: Names, name: str) -> list[Panel]:
         out = [error_panel(name, q.meaning, "attitude", t, rotation_angle(R, R[-1]), names,
                            whole, pose=kind == "SE(3)")]
         if kind == "SE(3)":
-            pos = Quantity("position", f"{q.meaning} {name}: position", q.components[3:],
+            pos = Quantity("position", f"{called(q.meaning, name)}: position", q.components[3:],
                            q.units[3:])
             out += against_time(pos, t, v[:, :3, 3], names, f"position:{name}", T=T,
                                 prescribed=whole)
@@ -207,10 +208,10 @@ def state_panels(sol: Any, names: Names, name: str) -> list[Panel]:
     if kind == "SE(2)":
         q = names.quantity("states", name, 3, TANGENT_DEFAULTS[kind])
         heading = np.unwrap(np.arctan2(v[:, 1, 0], v[:, 0, 0]))
-        pos = Quantity("position", f"{q.meaning} {name}: path in the plane", q.components[1:],
-                       q.units[1:])
+        pos = Quantity("position", f"{called(q.meaning, name)}: path in the plane",
+                       q.components[1:], q.units[1:])
         return [_path(name, pos.meaning, v[:, :2, 2], pos, whole),
-                *against_time(Quantity("heading", f"{q.meaning} {name}: heading",
+                *against_time(Quantity("heading", f"{called(q.meaning, name)}: heading",
                                        q.components[:1], [q.units[0] or "rad"]),
                               t, heading[:, None], names, f"heading:{name}", T=T,
                               prescribed=whole)]
@@ -221,7 +222,7 @@ def state_panels(sol: Any, names: Names, name: str) -> list[Panel]:
         out.append(error_panel(name, q.meaning, "direction", t, direction_angle(v, v[-1]),
                                names, whole))
     elif v.shape[1] == 2 and names.planar(q):
-        out.insert(0, _path(name, f"{q.meaning} {name}: path in the plane", v, q, whole))
+        out.insert(0, _path(name, f"{called(q.meaning, name)}: path in the plane", v, q, whole))
     return out
 
 
