@@ -379,19 +379,21 @@ def test_c_api_returns_error_codes_and_warm_starts(built: Built, tmp_path: Path)
     assert out["pack_domain"] == ["-4", str(len(layout.blocks) - 1)]  # the T key
     assert out["unsolved_after_errors"] == ["1"]
     py = built.solution
-    assert py.success, py.status  # every exported problem file solves at N_TEST
+    assert py.status == "Solve_Succeeded", py.hint  # every exported problem file solves
+    verified = str(0 if py.success else 1)  # the C verdict is Python's (at N_TEST = 16 a
+    # plan may miss by more than the 1% landing tolerance: then both say so)
     code, status, cost, _ = out["cold"]
-    assert (int(code), status) == (0, py.status)
+    assert (code, status) == (verified, py.status)
     assert abs(float(cost) - py.cost) <= TOL * max(1.0, abs(py.cost))
     assert out["x_shape"] == ["1", str(built.tr.nx)]
     code, status, cost, _ = out["warm"]
-    assert (code, status) == ("0", "Solve_Succeeded")  # a warm start from the solution
+    assert (code, status) == (verified, "Solve_Succeeded")  # a warm start from the solution
     assert abs(float(cost) - py.cost) <= TOL * max(1.0, abs(py.cost))
     assert out["states_rows"] == [str(N_TEST + 1)]
     # a primal-dual warm start from the solution (fatrop: primal only): the same cost, in
     # no more iterations than the primal warm start
     code, status, cost, iterations = out["dual"]
-    assert (code, status) == ("0", "Solve_Succeeded")
+    assert (code, status) == (verified, "Solve_Succeeded")
     assert abs(float(cost) - py.cost) <= TOL * max(1.0, abs(py.cost))
     assert int(iterations) <= int(out["warm"][3])
     if built.tr.backend == "ipopt":
@@ -470,11 +472,11 @@ def test_exported_folder_layout_and_parameter_file(tmp_path: Path) -> None:
 def test_cli_export_c_builds_a_runnable_solver(tmp_path: Path) -> None:
     out = tmp_path / "so3"
     r = CliRunner().invoke(app, ["export-c", str(ROOT / "problems" / "so3_rest_to_rest.yaml"),
-                                 "--out", str(out), "--set", "horizon.N=8", "--build"])
+                                 "--out", str(out), "--set", "horizon.N=16", "--build"])
     assert r.exit_code == 0, r.output
     assert "exported to" in r.output and (out / "solve").is_file()
     sol = c_solution(out / "solve")
-    assert sol.success and sol.N == 8
+    assert sol.success and sol.N == 16
 
 
 def test_cli_export_c_reports_bad_files(tmp_path: Path) -> None:

@@ -63,7 +63,7 @@ def evil(tmp_path_factory) -> tuple[codegen.Export, Path, str]:
     root = tmp_path_factory.mktemp("evil")
     canary = root / "pwned"
     name = EVIL.format(canary=canary)
-    exp = export_c(so3_solver(name=name), root / "c", build=True, cflags=CFLAGS,
+    exp = export_c(so3_solver(N=16, name=name), root / "c", build=True, cflags=CFLAGS,
                    positive=positive_parameters(MODELS["rigid_body"].parameters))
     return exp, canary, name
 

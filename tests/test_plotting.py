@@ -32,11 +32,11 @@ matplotlib.use("Agg")
 
 ROOT = Path(__file__).resolve().parent.parent
 PROBLEMS = ROOT / "problems"
-N = 12
+N = 24
 
 
 def solve_file(name: str, *sets: str) -> og.Solution:
-    """A problem file solved at N = 12 from the first guess (no multi-start: fast)."""
+    """A problem file solved at N = 24 from the first guess (no multi-start: fast)."""
     cfg = files.load(PROBLEMS / f"{name}.yaml", [f"horizon.N={N}", *sets])
     f, d = cfg.file, cfg.file.discretization
     solver = og.compile(files.build(cfg), f.horizon.N, d.retraction, d.rule, f.solver.ipopt,

@@ -239,10 +239,13 @@ def test_failing_points_are_recorded_and_the_rest_complete(client: Any, tmp_path
 def test_a_neighbour_rescues_a_failed_cold_start(client: Any, tmp_path: Path) -> None:
     problem = tmp_path / "circle.yaml"
     problem.write_text(CIRCLE)
-    df = og.sweep(problem, {"final.p": "[[0, 1], [-1, 0]]"}, client=client, chunk_size=8)
+    # N = 32: at 16 the chords of the half-way plan leave the circle by 1.8% between the
+    # midpoints where the constraint holds, more than the verdict's 1%
+    df = og.sweep(problem, {"final.p": "[[0, 1], [-1, 0]]"}, overrides=["horizon.N=32"],
+                  client=client, chunk_size=8)
     assert df["success"].all() and list(df["warm"]) == [False, True]
     assert df.loc[1, "start"] == f"warm from {df.loc[0, 'id']}"
-    assert abs(df.loc[1, "cost"] - 4.9737533571) < 1e-8  # half way round
+    assert abs(df.loc[1, "cost"] - 4.9444838410) < 1e-8  # half way round
 
 
 def test_resume_redoes_no_finished_point(so3_sweep: tuple[pd.DataFrame, Path], client: Any,

@@ -401,8 +401,20 @@ def _generate(tr: Transcription, ipopt: dict[str, Any] | None = None) -> dict[st
         with tempfile.TemporaryDirectory(prefix="ocgroupoid-export-") as tmp:
             cg.generate(tmp + "/")
             c, h = (Path(tmp) / f"{name}.{ext}" for ext in ("c", "h"))
-            out[c.name], out[h.name] = prelude + "\n" + c.read_text(), h.read_text()
+            out[c.name], out[h.name] = prelude + "\n" + _empty_copies(c.read_text()), \
+                h.read_text()
     return out
+
+
+#: CasADi 3.8 writes the copy of an empty matrix (a problem without parameters, broadcast
+#: over the stages) as ``casadi_copy(0, 0, 0+ i*0)``: a null destination given as an integer,
+#: which C compilers warn about; the copy moves nothing
+_EMPTY_COPY = re.compile(r"casadi_copy\(0, 0, 0\+ i\*0\);")
+
+
+def _empty_copies(source: str) -> str:
+    """Generated C without the empty copies of :data:`_EMPTY_COPY`."""
+    return _EMPTY_COPY.sub("/* an empty copy */", source)
 
 
 def _digest(data: str | bytes) -> str:

@@ -38,6 +38,7 @@ from .layout import Layout, Masks
 from .parameters import ParameterValues
 from .schemes import DEFAULT_RULE, DEFAULT_SCHEME, SCHEME_NAMES, make_scheme
 from .schemes.order2 import columns, stage_function
+from .schemes.order4 import GAUSS2
 from .watch import Listener, Watch
 
 DEFAULT_IPOPT: dict[str, Any] = {
@@ -104,6 +105,10 @@ class Discretization:
     #: bounds imposed at this many more points inside every interval (uniformly spaced),
     #: beyond the scheme's own; order4 only
     bound_points: int = 0
+    #: adaptive steps: per phase, per bound row, the side held throughout the phase (+1 upper,
+    #: -1 lower, 0 none): a bang-bang arc as an equality, so that the phases' durations are
+    #: the switching times (:mod:`ocgroupoid.solve.mesh`)
+    active: tuple[tuple[int, ...], ...] = ()
 
     def __post_init__(self) -> None:
         if not isinstance(self.N, int) or isinstance(self.N, bool) or self.N < 2:
@@ -122,6 +127,9 @@ class Discretization:
                 not 0 <= self.bound_points <= MAX_BOUND_POINTS:
             raise ConfigError(f"bound_points is an integer in 0..{MAX_BOUND_POINTS} (more points "
                               f"per interval where the bounds hold), got {self.bound_points!r}")
+        if self.active and len(self.active) != len(self.phases):
+            raise ConfigError(f"active sides are given for {len(self.active)} phases, the "
+                              f"grid has {len(self.phases)}")
         if self.phases and (sum(self.phases) != self.N or min(self.phases) < 1):
             raise ConfigError(f"phases {self.phases} must be positive interval counts summing "
                               f"to N = {self.N}")
@@ -307,6 +315,11 @@ class Transcription:
                 hi.append(ca.SX.zeros(b.m * b.ncols))
             else:
                 low, up = (ca.substitute(v, pb.P, P) for v in b.bounds)
+                if b.kind is Kind.INEQUALITY and self.disc.active:
+                    low, up = self._held(b, low, up)
+                    lo.append(low)
+                    hi.append(up)
+                    continue
                 lo.append(ca.repmat(low, b.ncols, 1))
                 hi.append(ca.repmat(up, b.ncols, 1))
         lbx, ubx = ca.DM.ones(self.nx) * -np.inf, ca.DM.ones(self.nx) * np.inf
@@ -314,6 +327,24 @@ class Transcription:
             lbx[int(self.layout.T[0])], ubx[int(self.layout.T[0])] = pb.T_bounds
         return ca.Function("bounds", [p], [ca.vertcat(*lo), ca.vertcat(*hi), lbx, ubx], ["p"],
                            ["lbg", "ubg", "lbx", "ubx"])
+
+    def _held(self, b: Block, low: ca.SX, up: ca.SX) -> tuple[ca.SX, ca.SX]:
+        """The sides of an inequality block column by column (interval by interval), with
+        the rows a phase holds at one side turned into equalities there
+        (:attr:`Discretization.active`)."""
+        per_phase = np.repeat(np.arange(len(self.disc.phases)), self.disc.phases)
+        # held at the first Gauss point of each interval, bounded at the others: one equality
+        # per interval (more would over-determine the interval's unknowns where a problem has
+        # conditions that its conservation laws already imply); the optimum holds the rest
+        times = np.asarray(getattr(self.scheme, "bound_times", np.zeros(b.points)))
+        gauss = np.isclose(times, GAUSS2[0])
+        lo_cols, hi_cols = [], []
+        for c in range(b.ncols):
+            side = np.concatenate([np.asarray(self.disc.active[per_phase[c]]) * int(g)
+                                   for g in gauss])
+            lo_cols += [up[i] if side[i] > 0 else low[i] for i in range(low.numel())]
+            hi_cols += [low[i] if side[i] < 0 else up[i] for i in range(up.numel())]
+        return ca.vertcat(*lo_cols), ca.vertcat(*hi_cols)
 
     # -- constraint rows ----------------------------------------------------------------
 

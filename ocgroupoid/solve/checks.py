@@ -25,6 +25,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from ..errors import ConfigError
 from ..model.problem import Problem
 from ..nlp.assembly import Kind
 from ..nlp.schemes import DEFAULT_RULE, DEFAULT_SCHEME
@@ -94,6 +95,11 @@ def redundant_rows(tr: Transcription, tol: float = 1e-9) -> list[str]:
     J = np.array(ca.DM(tr.solver.get_function("nlp_jac_g")(x, p)[1]))[eq]
     if J.size == 0:
         return []
+    if not np.all(np.isfinite(J)):
+        raise ConfigError("the constraints' derivatives are not finite at a start on the "
+                          "geodesic guess: a parameter or boundary value is beyond what double "
+                          "precision resolves here (of the order of 1e300?); give values of "
+                          "physical size")
     U, sv, _ = np.linalg.svd(J, full_matrices=True)
     rank = int(np.sum(sv > tol * max(1.0, sv.max(initial=0.0))))
     labels = [tr.row_labels()[i] for i in eq]

@@ -9,9 +9,10 @@ from ..nlp.transcription import RawResult, Transcription
 from .dependencies import dependent_conditions
 
 HINTS = {
-    "Infeasible_Problem_Detected": "the constraints and boundary conditions look incompatible: "
-    "check the final values (are they reachable?) and the prescribed components; "
-    "`ocgroupoid check` lists them",
+    "Infeasible_Problem_Detected": "the constraints and boundary conditions look incompatible "
+    "from this start: a reachable goal can look so from a poor start, so try multistart "
+    "(solver.multistart: true) first; then check the final values (are they reachable?) and "
+    "the prescribed components; `ocgroupoid check` lists them",
     "Not_Enough_Degrees_Of_Freedom": "more equality constraints than variables: free a "
     "boundary value or drop a constraint (`ocgroupoid check` names the redundant ones)",
     "Maximum_Iterations_Exceeded": "try multistart, continuation from a coarser N, a longer "

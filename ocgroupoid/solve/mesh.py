@@ -27,18 +27,33 @@ def active_sides(tr: Transcription, r: RawResult) -> tuple[np.ndarray, np.ndarra
         return np.zeros(0), np.zeros((0, 0))
     frac = np.concatenate([b.times for b in tr.blocks if b.kind is Kind.INEQUALITY])
     order = np.argsort(frac, kind="stable")
+    times = clock(tr, r, frac[order])
     g = np.array(tr.g_fun(r.x, r.p)).ravel()[rows][:, order]
     lbg, ubg, _, _ = (np.array(v).ravel() for v in tr.bounds_function(r.p))
     lo, hi = lbg[rows][:, order], ubg[rows][:, order]
     tol = ACTIVE * np.maximum(1.0, np.abs(np.where(np.isfinite(hi), hi, lo)))
     side = np.where(g >= hi - tol, 1, np.where(g <= lo + tol, -1, 0))
-    return frac[order] * tr.horizon(r.x, r.p), side
+    return times, side
+
+
+def clock(tr: Transcription, r: RawResult, frac: np.ndarray) -> np.ndarray:
+    """Times of fractions of the grid (interval k = floor(frac N) at its own fraction): T frac
+    for uniform steps, through each interval's own step for phased ones."""
+    w = np.concatenate([np.asarray(r.x, dtype=float).ravel(), r.p])
+    steps = w[tr.layout.steps] / tr.N
+    nodes = np.concatenate([[0.0], np.cumsum(steps)])
+    u = np.asarray(frac, dtype=float) * tr.N
+    k = np.minimum(np.floor(u), tr.N - 1).astype(int)
+    return nodes[k] + (u - k) * steps[k]
 
 
 def switch_times(tr: Transcription, r: RawResult) -> list[float]:
     """Where the active set of some bound changes: the entry and exit of every active arc;
-    a direct jump from one bound to the other (through free points) counts once, midway."""
+    a direct jump from one bound to the other (through the free points of the interval that
+    holds it) counts once, midway; a free arc between them (longer than two steps: the
+    straight segment between a left and a right turn) twice, at its ends."""
     t, side = active_sides(tr, r)
+    step = tr.horizon(r.x, r.p) / tr.N
     found: list[float] = []
     for row in side:
         runs, start = [], 0  # maximal runs of one side: (side, first time, last time)
@@ -48,7 +63,7 @@ def switch_times(tr: Transcription, r: RawResult) -> list[float]:
                 start = j
         active = [run for run in runs if run[0] != 0]
         for a, b in zip(active, active[1:]):
-            if a[0] == -b[0]:  # bang-bang: one switch between the arcs
+            if a[0] == -b[0] and b[1] - a[2] <= 2 * step:  # bang-bang: one switch
                 found.append((a[2] + b[1]) / 2)
             else:
                 found += [a[2], b[1]]
@@ -59,16 +74,47 @@ def switch_times(tr: Transcription, r: RawResult) -> list[float]:
     return sorted(found)
 
 
-def phases(tr: Transcription, r: RawResult) -> tuple[int, ...]:
-    """Interval counts of the phases between the switches of a uniform solve (N in all):
-    each phase gets intervals in proportion to its duration, at least one."""
-    N, T = tr.N, tr.horizon(r.x, r.p)
+def cut_times(tr: Transcription, r: RawResult) -> list[float]:
+    """The switches of r where phases begin: at least a twentieth of a step from the ends
+    and a step apart."""
+    N, T = tr.N, tr.horizon(r.x, r.p)  # uniform or phased: switch_times are times
     cuts: list[float] = []
     for s in switch_times(tr, r):
-        if T / N < s < T - T / N and all(abs(s - c) > T / N for c in cuts):
+        if 0.05 * T / N < s < T - 0.05 * T / N and all(abs(s - c) > T / N for c in cuts):
             cuts.append(s)
-    bounds = np.array([0.0, *sorted(cuts), T])
+    return sorted(cuts)
+
+
+def phases(tr: Transcription, r: RawResult) -> tuple[int, ...]:
+    """Interval counts of the phases between the switches of a solve (N in all): each phase
+    gets intervals in proportion to its duration, at least one."""
+    N, T = tr.N, tr.horizon(r.x, r.p)
+    bounds = np.array([0.0, *cut_times(tr, r), T])
     counts = np.maximum(1, np.round(np.diff(bounds) / T * N)).astype(int)
     while counts.sum() != N:  # round to N, changing the longest phase
         counts[np.argmax(counts)] += 1 if counts.sum() < N else -1
     return tuple(int(c) for c in counts)
+
+
+#: a bound held at one side at this share of a phase's points is held there throughout it
+HELD = 0.8
+
+
+def held_sides(tr: Transcription, r: RawResult, phases: tuple[int, ...]
+               ) -> tuple[tuple[int, ...], ...]:
+    """Per phase of ``phases`` (placed on the switches of r), per bound row: the side r holds
+    at :data:`HELD` of the points inside the phase (+1 upper, -1 lower), else 0. The phased
+    solve keeps those rows at their side (a bang-bang arc as an equality): the phases'
+    durations become the switching times, and a node lands on every switch."""
+    t, side = active_sides(tr, r)
+    cuts = np.array([0.0, *cut_times(tr, r)])
+    out = []
+    for a, b in zip(cuts, [*cuts[1:], np.inf]):
+        inside = (t > a + 1e-12) & (t < b - 1e-12)
+        row = []
+        for s in side:
+            v = s[inside]
+            share = {k: float(np.mean(v == k)) if v.size else 0.0 for k in (1, -1)}
+            row.append(1 if share[1] >= HELD else -1 if share[-1] >= HELD else 0)
+        out.append(tuple(row))
+    return tuple(out)

@@ -34,8 +34,9 @@ from ..nlp.transcription import Transcription
 
 #: RK4 substeps per piece: the first pair compared, and the most ever taken
 SUBSTEPS = (4, 256)
-#: at least this many samples of the bounds and constraints per piece
-DENSE = 8
+#: at least this many samples of the bounds and constraints per piece (their extremes then
+#: refined by the parabola through the three samples around each)
+DENSE = 32
 REL_TOL, ABS_TOL = 1e-3, 1e-12  # the replay's own error, against what it reports
 
 
@@ -162,20 +163,22 @@ class Replay:
         report = {"available": True, "input": self.input, "terminal_error": errors,
                   "max_terminal_error": worst, "integration_error": estimate, "substeps": M,
                   "final_state": z[:-1].tolist(), "running_cost": float(z[-1])}
+        self._samples = max(M, DENSE) + 1
         report.update(self._violations(H, P))
         if psi.size:
             report["constraint_residual_max"] = float(np.max(psi))
         return report
 
     def _violations(self, H: np.ndarray, P: np.ndarray) -> dict[str, Any]:
-        """The largest violation of every bound along the replay (H: per bound row, the
-        largest excess over its upper side and its lower side, per piece)."""
+        """The largest violation of every bound along the replay (H: the bounds' expressions
+        at the samples of every piece, :meth:`_pieces`), each extreme refined by a parabola."""
         if not H.size:
             return {}
         lo, hi = (np.array(v).ravel() for v in self.sides(P))
-        rows = H.shape[0] // 2
-        over = np.max(H[:rows], axis=1) - hi
-        under = lo - np.min(H[rows:], axis=1)
+        n = H.shape[1] // self._samples
+        S = H.reshape(H.shape[0], n, self._samples)
+        over = extreme(S) - hi
+        under = lo + extreme(-S)
         worst = np.maximum(0.0, np.maximum(np.nan_to_num(over, nan=np.inf, neginf=0.0),
                                            np.nan_to_num(under, nan=np.inf, neginf=0.0)))
         per: dict[str, float] = {}
@@ -187,8 +190,8 @@ class Replay:
     def _pieces(self, k: int, m: int, M: int, n: int) -> ca.Function:
         """``(z0, coefficients (k m x n), steps (1 x n), P) -> (z, H, psi)``: z after every
         piece (M RK4 substeps, the input evaluated by Horner's rule in t - t_j, the running
-        cost as the last state), and per piece the largest and smallest value of every bound
-        expression (stacked) and the largest |psi| over max(M, DENSE) + 1 samples."""
+        cost as the last state), the bound expressions at max(M, DENSE) + 1 samples of every
+        piece (their columns, piece after piece) and per piece the largest |psi| there."""
         key = (k, m, M, n)
         if key not in self._cache:
             assert self.rhs is not None and self.along is not None
@@ -218,19 +221,29 @@ class Replay:
             for i in range(S):
                 zs = rk4(lambda x, s, t=i * ds: f(x, t + s * ds), zs, ds)
                 samples.append(self.along(zs[:nz], u_at((i + 1) * ds), P))
-            Hs = ca.horzcat(*[v[1] for v in samples])
+            H = ca.horzcat(*[v[1] for v in samples])
             psis = ca.horzcat(*[ca.fabs(v[2]) for v in samples])
-            nH = Hs.size1()
-            H = ca.vertcat(_rowmax(Hs), -_rowmax(-Hs)) if nH else ca.SX(0, 1)
             psi = ca.mmax(psis) if psis.numel() else ca.SX(0, 1)
             piece = ca.Function("piece", [z, c, h, P], [zz, H, psi])
             self._cache[key] = piece.mapaccum(n)
         return self._cache[key]
 
 
-def _rowmax(A: ca.SX) -> ca.SX:
-    """The largest entry of every row of A."""
-    out = A[:, 0]
-    for j in range(1, A.size2()):
-        out = ca.fmax(out, A[:, j])
-    return out
+def extreme(S: np.ndarray) -> np.ndarray:
+    """The largest value of every row of samples ``S`` (rows x pieces x samples, equally
+    spaced in each piece), refined where the largest sample is inside a piece by the vertex
+    of the parabola through it and its neighbours (third order in the spacing)."""
+    rows, n, m = S.shape
+    flat = S.reshape(rows, n * m)
+    best = np.nanmax(np.where(np.isnan(flat), np.inf, flat), axis=1)
+    i = np.argmax(np.where(np.isnan(S), np.inf, S), axis=2)  # per row and piece
+    inside = (i > 0) & (i < m - 1)
+    r, p = np.nonzero(inside)
+    a, b, c = S[r, p, i[r, p] - 1], S[r, p, i[r, p]], S[r, p, i[r, p] + 1]
+    curvature = a - 2 * b + c
+    with np.errstate(divide="ignore", invalid="ignore"):
+        vertex = b - (c - a) ** 2 / (8 * curvature)
+    vertex = np.where(curvature < 0, vertex, b)
+    refined = np.full((rows, n), -np.inf)
+    refined[r, p] = vertex
+    return np.maximum(best, np.max(refined, axis=1))

@@ -344,15 +344,17 @@ class Measures:
                       for name, e in problem.invariants for i in range(e.numel())]
         s, xi = ca.SX.sym("s", G.state_size), ca.SX.sym("xi", G.algebra_dim)
         E = energy(problem)
-        exprs = ca.substitute(ca.vertcat(E, *[e for _, e in problem.invariants]), problem.q,
-                              G.base(s))
+        exprs = ca.substitute(ca.vertcat(E, *[e for _, e in problem.invariants]),
+                              ca.vertcat(problem.q, problem.s), ca.vertcat(G.base(s), s))
         #: ``(s_k, y_k, P) -> [E, invariants...]`` at every node
         self.nodes = ca.Function("node_quantities", [s, problem.y, problem.P],
                                  [exprs]).map(steps + 1)
         s_half = step(s, h / 2 * xi)
         #: ``(s_k, xi_k, P) -> E(step(s_k, tau(h xi_k / 2)), xi_k)`` on every interval
         self.intervals = ca.Function("interval_energy", [s, xi, problem.P], [ca.substitute(
-            ca.substitute(E, problem.q, G.base(s_half)), problem.y, xi)]).map(steps)
+            ca.substitute(E, ca.vertcat(problem.q, problem.s), ca.vertcat(G.base(s_half),
+                                                                          s_half)),
+            problem.y, xi)]).map(steps)
 
     def __call__(self, integrator: str, S: np.ndarray, Y: np.ndarray, seconds: float
                  ) -> Trajectory:

@@ -102,7 +102,7 @@ class Solver:
                                    bound_points=bound_points)
         self.transcription = Transcription(problem, self.disc, self.ipopt, jit, backend)
         self._coarse: dict[int, Transcription] = {}
-        self._phased: dict[tuple[int, ...], Transcription] = {}
+        self._phased: dict[tuple[Any, ...], Transcription] = {}
 
     def _at(self, N: int) -> Transcription:
         if N == self.disc.N:
@@ -209,6 +209,14 @@ class Solver:
         if self.disc.steps == "adaptive" and not interrupt.requested and best.success:
             solution.diagnostics["adaptive"] = adaptive
             solution.discretization["steps"] = "adaptive" if adaptive["used"] else "uniform"
+            if not adaptive["used"] and len(adaptive["phases"]) > 1:  # switches, unresolved
+                why = (f"adaptive steps were asked for but not used: {adaptive['reason']}; "
+                       "this uniform solution does not resolve the switches of its controls "
+                       "to the scheme's order: ask for uniform steps (a finer N), or another N")
+                solution = replace(solution, success=False, hint="; ".join(
+                    filter(None, [why, solution.hint])))
+                solution.diagnostics["verdict"]["verified"] = False
+                solution.diagnostics["verdict"]["failures"].append(why)
         if notes:
             solution.diagnostics["continuation"] = notes
             solution = replace(solution, hint="; ".join([*notes, *filter(None, [solution.hint])]))
@@ -265,16 +273,28 @@ class Solver:
         if len(phases) < 2:
             report["reason"] = "no switch of the bounds' active set: uniform steps kept"
             return tr, r, report
-        progress(f"adaptive steps: phases of {', '.join(map(str, phases))} intervals")
-        if phases not in self._phased:
-            self._phased[phases] = Transcription(self.problem, replace(self.disc, phases=phases),
-                                                 self.ipopt, self.jit, self.backend)
-        phased = self._phased[phases]
-        p = phased.pack(params, initial, final, tr.horizon(r.x, r.p))
-        result = phased.solve(interpolate(tr, r.x, r.p, self.disc.N), p)
-        if not result.success:
+        src, result, phased = (tr, r), None, tr
+        for _ in range(MESH_ROUNDS):  # the switches a phased solve shows: the next mesh
+            progress(f"adaptive steps: phases of {', '.join(map(str, phases))} intervals")
+            held = mesh.held_sides(src[0], src[1], phases)
+            key = (phases, held)
+            if key not in self._phased:
+                self._phased[key] = Transcription(
+                    self.problem, replace(self.disc, phases=phases, active=held), self.ipopt,
+                    self.jit, self.backend)
+            phased = self._phased[key]
+            p = phased.pack(params, initial, final, src[0].horizon(src[1].x, src[1].p))
+            result = phased.solve(interpolate(src[0], src[1].x, src[1].p, self.disc.N), p)
+            if not result.success:
+                break
+            src = (phased, result)
+            report["phases"] = list(phases)
+            report["held"] = [list(h) for h in held]
+        assert result is not None
+        if src[0] is tr:  # no phased solve succeeded
             report["reason"] = f"the phased solve ended {result.status}: uniform steps kept"
             return tr, r, report
+        phased, result = src
         miss = {"uniform": landing(tr, r), "adaptive": landing(phased, result)}
         report["landing"] = miss
         if miss["adaptive"] > 1.1 * miss["uniform"] + LANDING_FLOOR:
@@ -287,6 +307,9 @@ class Solver:
         return phased, result, report
 
 
+#: phased solves of adaptive steps (the phases on the switches of the uniform solve, its
+#: bang-bang arcs held at their bound)
+MESH_ROUNDS = 1
 #: landing misses (fractions of the distance covered) below this are exact for the comparison
 LANDING_FLOOR = 1e-10
 

@@ -80,9 +80,8 @@ def verify_function(tr: Transcription, replay: Replay, substeps: int, check_tol:
         else ca.MX(0)
     if H.numel():
         lo, hi = replay.sides(P)
-        rows = H.size1() // 2
-        over = _rowmax(H[:rows, :]) - hi
-        under = lo - (-_rowmax(-H[rows:, :]))
+        over = _rowmax(H) - hi
+        under = lo + _rowmax(-H)
         violation = ca.fmax(ca.fmax(over, under), 0)
         finite = lambda v: ca.if_else(ca.fabs(v) < 1e300, ca.fabs(v), 0)  # noqa: E731
         size = ca.fmax(ca.fmax(finite(lo), finite(hi)), 1)
