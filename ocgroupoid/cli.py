@@ -18,6 +18,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
+from ._startup import interrupt_exit_code, terminated
 from .bench.commands import bench
 from .errors import ConfigError, OcgError
 
@@ -151,9 +152,9 @@ def solve(
                   + (f"; solution written to {target}" if target else ""))
     from rich.markup import escape
     if sol.status == "interrupted":
-        err.print("[bold red]interrupted:[/] the best point so far is "
+        err.print(f"[bold red]{_stopped_by()}:[/] the best point so far is "
                   + (f"in {target} " if target else "") + "with success: false")
-        raise typer.Exit(130)
+        raise typer.Exit(interrupt_exit_code())
     if not sol.success:
         what = "not verified" if sol.status == "Solve_Succeeded" else f"solver failed: {sol.status}"
         if sol.diagnostics.get("accuracy", {}).get("met") is False:
@@ -455,8 +456,8 @@ def sweep(
         fail(str(e))
         return
     except KeyboardInterrupt:
-        fail(f"interrupted; the finished points are kept: finish with --resume --out {out_dir}",
-             130)
+        fail(f"{_stopped_by()}; the finished points are kept: finish with --resume --out "
+             f"{out_dir}", interrupt_exit_code())
         return
     if not quiet:
         out.print(summary(df) + f"\ntable written to {out_dir / 'table.parquet'}")
@@ -464,16 +465,22 @@ def sweep(
         raise typer.Exit(1)
 
 
+def _stopped_by() -> str:
+    """How the command was stopped: ``interrupted`` (Ctrl-C) or ``terminated (SIGTERM)``."""
+    return "terminated (SIGTERM)" if terminated() else "interrupted"
+
+
 def main() -> None:
-    """Entry point of the ``ocgroupoid`` command (Ctrl-C: one line, exit 130)."""
+    """Entry point of the ``ocgroupoid`` command (Ctrl-C: one line, exit 130; SIGTERM is
+    handled as Ctrl-C, exit 143)."""
     from ._startup import release
 
-    release()  # from here on Ctrl-C is a KeyboardInterrupt the commands handle
+    release()  # from here on Ctrl-C (and SIGTERM) is a KeyboardInterrupt the commands handle
     try:
         app()
     except KeyboardInterrupt:
-        err.print("interrupted", highlight=False)
-        raise SystemExit(130) from None
+        err.print(_stopped_by(), highlight=False)
+        raise SystemExit(interrupt_exit_code()) from None
 
 
 if __name__ == "__main__":  # pragma: no cover
