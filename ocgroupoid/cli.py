@@ -2,7 +2,8 @@
 
 Exit codes: 0 solved; 1 the solver failed (the solution file is still written, with
 ``success: false`` and IPOPT's status); 2 bad input (the message names the key, the line and
-the fix, never a traceback).
+the fix, never a traceback); 3 a sweep could not write (a full disk); 130 Ctrl-C and 143
+SIGTERM (a solve writes its best point so far, a sweep keeps its finished points).
 """
 
 from __future__ import annotations
@@ -427,31 +428,54 @@ def sweep(
     seed: int = typer.Option(0, "--seed", help="seed of the random draws"),
     set_: list[str] = typer.Option([], "--set", help=SET_HELP),
     out_dir: Path = typer.Option(..., "--out", help="folder for the table (table.parquet), "
-                                 "the points' records and their solutions"),
+                                 "the points' records and their solutions; one sweep at a "
+                                 "time"),
     scheduler: Optional[str] = typer.Option(None, "--scheduler", help="tcp://HOST:PORT of a "
                                             "running Dask scheduler (default: a local cluster)"),
     workers: Optional[int] = typer.Option(None, "--workers", help="local worker processes "
                                           "(default: one per core)"),
-    resume: bool = typer.Option(False, "--resume", help="finish the sweep in --out without "
-                                "redoing finished points"),
+    resume: bool = typer.Option(False, "--resume", help="finish the sweep in --out (same "
+                                "grid) without redoing finished points; points whose worker "
+                                "was lost or that raised an error are solved again"),
+    retry_failed: bool = typer.Option(False, "--retry-failed", help="with --resume: solve "
+                                      "again every point that did not succeed"),
     warm: str = typer.Option("fallback", "--warm", help="neighbour warm starts: fallback (when "
                              "the cold start fails), first, or off"),
     timeout: float = typer.Option(10.0, "--timeout", help="seconds --scheduler has to answer"),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="print only errors"),
 ) -> None:
     """Solve a problem file at every point of a grid or random samples of --set overrides, on
-    Dask; one row per point in OUT/table.parquet. Exit 1 if any point failed."""
+    Dask; one row per point in OUT/table.parquet.
+
+    Before the work starts it prints the number of points and the disk they take (about
+    35 kB a point: a record and a solution), and once the first chunk is back the time the
+    rest will take. Exit codes: 0 every point solved, 1 some failed (all are in the table),
+    2 bad input (or another sweep running in OUT, or --resume of another grid), 3 a write
+    failed (a full disk: the finished points and their table are kept; --resume finishes),
+    130 interrupted (143 SIGTERM)."""
+    from .errors import STORAGE_EXIT, StorageError
     from .solve.outputs import check_folder
     from .sweep import sweep as run_sweep
     from .sweep.progress import progress_bar, summary
 
+    def report(line: str) -> None:
+        if not quiet:
+            err.print(line, highlight=False)
+
     try:
         check_folder(out_dir, "--out")
+        if retry_failed and not resume:
+            raise ConfigError("--retry-failed solves failed points of an earlier run again: "
+                              "add --resume")
         with progress_bar(err, quiet) as bar:
             df = run_sweep(file, grid, random=random, samples=samples, seed=seed,
                            overrides=set_, out=out_dir, scheduler=scheduler, workers=workers,
-                           resume=resume, warm=warm, timeout=timeout,  # type: ignore[arg-type]
-                           progress=bar)
+                           resume=resume, retry_failed=retry_failed,
+                           warm=warm, timeout=timeout,  # type: ignore[arg-type]
+                           progress=bar, report=report)
+    except StorageError as e:
+        fail(str(e), STORAGE_EXIT)
+        return
     except OcgError as e:
         fail(str(e))
         return
