@@ -34,7 +34,6 @@ import shutil
 import subprocess
 import tempfile
 from dataclasses import dataclass
-from functools import partial
 from pathlib import Path
 from typing import Any, Collection, Sequence
 
@@ -43,7 +42,7 @@ import numpy as np
 
 from .._version import __version__
 from ..errors import ConfigError, ExportError
-from ..model import values as checks
+from ..model.ranges import positive_parameters
 from ..model.problem import Problem
 from ..nlp.parameters import ParameterValues
 from ..nlp.schemes import DEFAULT_RULE, DEFAULT_SCHEME
@@ -241,20 +240,6 @@ def static_labels(pb: Problem) -> dict[str, Any]:
             kept.append(b)
     labels["bounds"] = kept
     return labels
-
-
-def positive_parameters(schema: type[Any]) -> list[str]:
-    """The fields of a model's ``parameters`` schema (pydantic) that must be > 0, as the
-    problem files validate them (:func:`~ocgroupoid.model.values.positive`, ``Positive3``...):
-    the exported driver applies the same ranges to its parameter file."""
-    out = []
-    for name, info in getattr(schema, "model_fields", {}).items():
-        for meta in info.metadata:
-            func = getattr(meta, "func", None)
-            if func is checks.positive or (isinstance(func, partial) and func.func is
-                                           checks.check_vector and func.keywords.get("positive")):
-                out.append(name)
-    return out
 
 
 def model_sources(tr: Transcription, default_p: np.ndarray, guess: str,

@@ -16,7 +16,8 @@ A problem file is data::
 :mod:`~ocgroupoid.files.messages`), and ``build`` turns it into a Problem. A boundary key
 left out, or written null (also per component: ``[0, 0, null]``), is free. A number in
 ``parameters``, ``initial`` and ``final`` may be written as an expression of constants, as in
-expressions: ``theta: [pi]``, ``angle: pi/2``. What the machine can take is checked too
+expressions: ``theta: [pi]``, ``angle: pi/2``. Every number lies within the scale double
+precision resolves (:mod:`~ocgroupoid.files.scale`). What the machine can take is checked too
 (:mod:`~ocgroupoid.files.limits`): N within a memory estimate, an installed linear solver.
 ``horizon.N: auto`` with ``solver.accuracy`` (or ``solver.replay_accuracy``) leaves N to the
 search of :mod:`~ocgroupoid.solve.auto` (its keys checked together by :func:`check_auto`).
@@ -41,6 +42,7 @@ from .custom import Definition, spec as custom_spec
 from .expressions import CONSTANTS, FUNCTIONS, compile_expression
 from ..nlp.schemes import SCHEME_NAMES
 from .messages import validate
+from .scale import check_scale
 from .schema import ProblemFile
 from .source import Locator, apply_override, read_yaml
 
@@ -104,6 +106,7 @@ def load(path: str | Path | None = None, overrides: list[str] | None = None,
     sections = [validate(schema, data.get(key), (key,), locate)
                 for key, schema in (("parameters", spec.parameters), ("initial", spec.initial),
                                     ("final", spec.final))]
+    check_scale(data, spec, locate)
     return Config(Path(path) if path is not None else None, top, spec, *sections, raw=data,
                   locate=locate)
 

@@ -12,15 +12,13 @@ from pydantic import BeforeValidator, Field, StrictBool, model_validator
 from pydantic_core import PydanticCustomError
 
 from ..lie.retraction import RETRACTION_NAMES
+from ..model.ranges import T_RANGE, TIME_RANGE
 from ..model.values import Strict, number, positive
 from ..nlp.schemes import SCHEME_NAMES
 from ..nlp.transcription import BACKENDS, DEFAULT_BACKEND
 from ..solve.auto import ACCURACY_MAX, N_MAX, N_MIN
 
 
-#: the final times a problem file may state (seconds, or the model's unit of time): beyond
-#: them the step h = T/N under- or overflows the scaling of the NLP (SVD and LAPACK failures)
-T_RANGE = (1e-6, 1e6)
 #: perturbed starts of ``solver.multistart`` (each is a full IPOPT solve) and coarse grids
 #: of ``solver.continuation``
 MULTISTART_MAX = 1000
@@ -28,13 +26,11 @@ CONTINUATION_MAX = 8
 
 
 def _time(v: Any, what: str = "T") -> float:
-    """A number of seconds within :data:`T_RANGE`."""
+    """A number of seconds within :data:`~ocgroupoid.model.ranges.T_RANGE`."""
     x = positive(v, what)
-    lo, hi = T_RANGE
-    if not lo <= x <= hi:
-        raise ValueError(f"{what} = {x:g} is outside [{lo:g}, {hi:g}], the range of times the "
-                         "NLP's scaling tolerates; rescale the units of time (and the "
-                         "parameters with them)")
+    message = TIME_RANGE.problem(what, [x])
+    if message is not None:
+        raise ValueError(message)
     return x
 
 
