@@ -127,7 +127,7 @@ def solve(
             with _status("building the NLP...", quiet):
                 solver = compile_problem(problem, f.horizon.N, d.retraction, d.rule,
                                          f.solver.ipopt, d.scheme, d.steps, f.solver.jit,
-                                         f.solver.backend)
+                                         f.solver.backend, f.solver.max_seconds)
             with _status("solving...", quiet) as status:
                 sol = solver.solve(multistart=f.solver.multistart,
                                    continuation=f.solver.continuation or None,
@@ -177,7 +177,7 @@ def _solve_to_accuracy(problem: Any, f: Any, quiet: bool) -> Any:
             progress=status.update if status is not None else _silent,
             report=_silent if quiet else lambda level: err.print(grid_line(level),
                                                                  highlight=False),
-            jit=s.jit, backend=s.backend)
+            jit=s.jit, backend=s.backend, max_seconds=s.max_seconds)
 
 
 def grid_line(level: Any) -> str:

@@ -94,7 +94,7 @@ def solver_for(structure: str, pb: Problem, cfg: Config, args: dict[str, Any]
     f = cfg.file
     # the discretization section's keys (scheme, retraction, rule, ...) are compile()'s
     solver = compile(pb, f.horizon.N, ipopt=f.solver.ipopt, jit=f.solver.jit,
-                     backend=f.solver.backend,
+                     backend=f.solver.backend, max_seconds=f.solver.max_seconds,
                      **f.discretization.model_dump())
     _solvers[structure] = solver
     _solvers.move_to_end(structure)
