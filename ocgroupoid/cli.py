@@ -30,6 +30,7 @@ err = Console(stderr=True, soft_wrap=True)
 
 app.add_typer(bench, name="bench")  # ocgroupoid bench work-precision | stability
 SET_HELP = "Override any key: KEY=VALUE, the value read as YAML (e.g. horizon.N=128)."
+LONG_SOLVE = 10.0  # seconds: a solve estimated longer is announced with its estimate
 
 
 def fail(message: str, code: int = 2) -> None:
@@ -120,6 +121,10 @@ def solve(
         target, picture = _solve_outputs(out_path, plot_path, f.output)
         problem = files.build(cfg)
         d = f.discretization
+        est = files.estimate(cfg, problem)
+        if est is not None and est.seconds > LONG_SOLVE and not quiet:
+            err.print(f"N={f.horizon.N}: this solve takes {est}; solver.max_seconds = "
+                      f"{f.solver.max_seconds:g}", highlight=False)
         t0 = time.perf_counter()
         if f.horizon.N == "auto":
             sol = _solve_to_accuracy(problem, f, quiet)

@@ -193,3 +193,27 @@ def test_the_helper_answers_and_is_stopped_every_way() -> None:
     assert isolated.Isolated(_die).call(None, 30).reason == "died"
     with pytest.raises(RuntimeError, match="ValueError: no"):
         isolated.Isolated(_fail).call(None, 30)
+
+
+# -- the time a solve takes, up front (item 8) -------------------------------------------------
+
+def test_a_long_solve_is_announced_with_its_estimate(monkeypatch) -> None:
+    from ocgroupoid import cli
+
+    monkeypatch.setattr(cli, "LONG_SOLVE", 0.0)  # every solve is long now
+    r = runner.invoke(app, ["solve", str(PROBLEMS / "so3_rest_to_rest.yaml"), "--set",
+                            "horizon.N=8", "--set", "solver.multistart=false"])
+    assert r.exit_code == 0, r.output
+    text = " ".join(r.output.split())
+    assert "N=8: this solve takes about" in text and "then 1 start of" in text
+    assert "solver.max_seconds = 600" in text
+
+
+def test_N_beyond_the_time_limit_is_refused_with_the_estimate() -> None:
+    t0 = time.perf_counter()
+    r = runner.invoke(app, ["check", str(PROBLEMS / "plate_ball.yaml"), "--set",
+                            "horizon.N=20000"])
+    text = " ".join(r.output.split())
+    assert r.exit_code == 2 and time.perf_counter() - t0 < 5, text
+    assert "horizon.N = 20000: a solve takes about" in text and "more than " \
+        "solver.max_seconds = 600" in text and "fatrop's build grows like N^2" in text

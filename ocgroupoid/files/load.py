@@ -184,7 +184,8 @@ def _only_constants(text: str) -> bool:
 
 def build(cfg: Config) -> Problem:
     """The Problem a validated Config describes: the model's, with the file's horizon,
-    objective weights and bounds."""
+    objective weights and bounds; refused when its N exceeds the memory or the time
+    (``solver.max_seconds``) a solve may take (:mod:`~ocgroupoid.files.limits`)."""
     f, locate = cfg.file, cfg.locate
     horizon = f.horizon
     pb = cfg.spec.build(cfg.parameters, cfg.initial, cfg.final, horizon.guess, cfg.name)
@@ -192,6 +193,9 @@ def build(cfg: Config) -> Problem:
         3 if f.solver.multistart is True else int(f.solver.multistart)
     limits.check_size(pb, horizon.grids[1] if horizon.N == "auto" else horizon.N, starts,
                       locate("horizon", "N"))
+    if horizon.N != "auto":  # each grid of N: auto is held to solver.max_seconds as it runs
+        limits.check_time(pb, horizon.N, f.solver.multistart, f.solver.backend,
+                          f.solver.max_seconds, locate("horizon", "N"))
     try:
         if horizon.T == "free":
             pb.horizon(horizon.guess, free=True, T_min=horizon.T_min, T_max=horizon.T_max)
@@ -204,3 +208,11 @@ def build(cfg: Config) -> Problem:
         raise ConfigError(f"{locate('horizon')}: {err}") from None
     bounds.apply(pb, f.bounds, locate)
     return pb
+
+
+def estimate(cfg: Config, pb: Problem) -> limits.Estimate | None:
+    """The time a solve of the file takes, about (None with ``horizon.N: auto``)."""
+    f = cfg.file
+    if f.horizon.N == "auto":
+        return None
+    return limits.estimate(pb, f.horizon.N, f.solver.multistart, f.solver.backend)
