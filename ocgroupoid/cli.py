@@ -403,7 +403,7 @@ def export_c_command(
         with _status("exporting C code...", False):
             done = export_c(files.build(cfg), out_dir, N, d.retraction, d.rule,
                             f.solver.ipopt, scheme=d.scheme, steps=d.steps, force=force,
-                            backend=f.solver.backend,
+                            backend=f.solver.backend, max_seconds=f.solver.max_seconds,
                             positive=positive_parameters(cfg.spec.parameters))
         if build:
             with _status("building with make...", False):

@@ -32,6 +32,9 @@ RATIO = 1e12
 #: the step h = T/N under- or overflows the scaling of the NLP (SVD and LAPACK failures)
 T_RANGE = (1e-6, 1e6)
 
+#: the largest problem file or parameter file (bytes): a few kilobytes of text is plenty
+FILE_BYTES = 1_000_000
+
 #: the kinds of range, as the C table numbers them (ocg_params.c)
 SIGNED, POSITIVE, TIME = 0, 1, 2
 
