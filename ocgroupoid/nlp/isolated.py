@@ -10,8 +10,8 @@ first call, it serves every later one (a call costs ~0.1 ms more than running in
 The caller waits for the answer until its deadline, reads what the helper prints on stderr
 (counting CasADi's "NaN detected" warnings, passing anything else on), and kills the helper
 past the deadline, after :data:`NAN_LIMIT` NaN evaluations, or when ``stop()`` says so
-(Ctrl-C); the next call forks a new helper. Without ``os.fork`` (Windows) the work runs
-in-process, unguarded.
+(Ctrl-C); the next call forks a new helper. Where no helper can be forked (Windows) the
+work runs in-process, unguarded.
 """
 
 from __future__ import annotations
@@ -22,6 +22,7 @@ import select
 import signal
 import struct
 import sys
+import threading
 import time
 import warnings
 import weakref
@@ -129,6 +130,8 @@ class Isolated:
     def __init__(self, work: Callable[[Any], Any]) -> None:
         self.work = work
         self.pid = 0
+        self.fds = (-1, -1, -1)  # the caller's ends: requests, answers, the helper's stderr
+        self._lock = threading.Lock()  # one call at a time through the pipes
         self._finalizer: weakref.finalize | None = None
         self.nans = 0  # NaN evaluations of the last call
         self._pending = b""  # the helper's last line on stderr, not yet complete
@@ -139,9 +142,14 @@ class Isolated:
         errors_r, errors_w = os.pipe()
         sys.stdout.flush()
         sys.stderr.flush()
-        with warnings.catch_warnings():  # a multi-threaded caller (a Dask worker): the
-            warnings.simplefilter("ignore", DeprecationWarning)  # helper runs one thread
-            pid = os.fork()
+        try:
+            with warnings.catch_warnings():  # a multi-threaded caller (a Dask worker): the
+                warnings.simplefilter("ignore", DeprecationWarning)  # helper has one thread
+                pid = os.fork()
+        except BaseException:
+            for fd in (requests_r, requests_w, answers_r, answers_w, errors_r, errors_w):
+                os.close(fd)
+            raise
         if pid == 0:
             _serve(self.work, requests_r, answers_w, errors_w)
         for fd in (requests_r, answers_w, errors_w):
@@ -160,12 +168,18 @@ class Isolated:
              ) -> Any:
         """``work(request)``, or :class:`Stopped` when it did not answer within ``seconds``,
         evaluated NaN :data:`NAN_LIMIT` times, ``stop()`` became true, or the helper died.
-        An exception of ``work`` is raised here as RuntimeError."""
-        self.nans = 0
-        if not hasattr(os, "fork"):  # pragma: no cover - Windows: unguarded
-            return self.work(request)
-        if not self.pid:
-            self._start()
+        An exception of ``work`` is raised here as RuntimeError. Where no helper can be
+        forked (no ``os.fork``, or the system refuses one), the work runs here, unguarded."""
+        with self._lock:
+            self.nans = 0
+            if not self.pid:
+                try:
+                    self._start()
+                except (AttributeError, OSError):  # Windows, or no process to spare
+                    return self.work(request)
+            return self._call(request, seconds, stop)
+
+    def _call(self, request: Any, seconds: float, stop: Callable[[], bool]) -> Any:
         requests_w, answers_r, errors_r = self.fds
         deadline = time.monotonic() + seconds
         try:

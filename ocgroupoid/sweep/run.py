@@ -129,7 +129,7 @@ def sweep(problem: str | Path | Mapping[str, Any],
         run = _Run(store, len(pts), finished, progress, report)
         try:
             for p, message in invalid:
-                run.store(record.failed(p, record.INVALID, message), None)
+                run.save(record.failed(p, record.INVALID, message), None)
             workers_used = 0
             if c is not None:
                 slots = c.nthreads()  # worker -> threads: the tasks that run at once
@@ -140,7 +140,7 @@ def sweep(problem: str | Path | Mapping[str, Any],
                 run.estimate_after(tasks[0], len(valid), sum(slots.values()))
                 with closing(outcomes(c, tasks, sum(slots.values()))) as results:
                     for outcome in results:
-                        run.store(outcome.record, outcome.solution)
+                        run.save(outcome.record, outcome.solution)
         except StorageError as err:
             raise StorageError(_stopped(store, [p.id for p in pts], keys, err)) from None
         df = frame(store.records([p.id for p in pts]), keys)
@@ -174,7 +174,9 @@ class _Run:
             self.first = ({p.id for p in first.points}, points, slots)
         self.t0 = time.perf_counter()
 
-    def store(self, rec: dict[str, Any], solution: str | None) -> None:
+    def save(self, rec: dict[str, Any], solution: str | None) -> None:
+        """Write a point (StorageError if the disk refuses), then tell progress and, once
+        the first chunk is in, the estimate."""
         self.sweep_dir.save(rec, solution)
         self.finished += 1
         self.progress(self.finished, self.total, rec)
