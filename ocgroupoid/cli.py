@@ -469,9 +469,6 @@ def sweep(
 
     try:
         check_folder(out_dir, "--out")
-        if retry_failed and not resume:
-            raise ConfigError("--retry-failed solves failed points of an earlier run again: "
-                              "add --resume")
         with progress_bar(err, quiet) as bar:
             df = run_sweep(file, grid, random=random, samples=samples, seed=seed,
                            overrides=set_, out=out_dir, scheduler=scheduler, workers=workers,

@@ -148,6 +148,9 @@ def test_resume_solves_lost_and_errored_points_again(client: Any, tmp_path: Path
                       resume=True, retry_failed=True)
     assert failed.attrs["attempted"] == 1 and failed["success"].all()
     assert list(failed["cost"]) == list(df["cost"])
+    r = runner.invoke(app, ["sweep", str(SO3), "--grid", f"{ANGLES}=0.5:2:4", "--set", SETS[0],
+                            "--out", str(out), "--retry-failed"])
+    assert r.exit_code == 2 and "add --resume" in one_line(r.output)
 
 
 # -- a full disk (item 4) ----------------------------------------------------------------------

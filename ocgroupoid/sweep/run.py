@@ -103,6 +103,9 @@ def sweep(problem: str | Path | Mapping[str, Any],
         raise ConfigError(f"warm={warm!r}: choose one of {', '.join(WARM_MODES)}")
     if chunk_size is not None and chunk_size < 1:
         raise ConfigError(f"chunk_size must be >= 1, got {chunk_size}")
+    if retry_failed and not resume:
+        raise ConfigError("--retry-failed (retry_failed=True) solves the failed points of an "
+                          "earlier run again: add --resume (resume=True)")
     source = Source.of(problem, overrides)
     grid_axes, random_draws = axes(grid), draws(random)
     pts = points(grid_axes, random_draws, samples, seed, source.digest)
