@@ -22,10 +22,10 @@ if TYPE_CHECKING:
 IN_FLIGHT = 2
 
 
-def outcomes(client: Client, tasks: Sequence[Task], slots: int) -> Iterator[Outcome]:
-    """Run ``tasks`` on ``client`` (``slots`` task slots) and yield every point's outcome as
-    its chunk finishes. Unfinished chunks are cancelled when the caller stops (an interrupt,
-    a write error), so the cluster is free for the resumed run."""
+def outcomes(client: Client, tasks: Sequence[Task], slots: int) -> Iterator[list[Outcome]]:
+    """Run ``tasks`` on ``client`` (``slots`` task slots) and yield each chunk's outcomes as
+    it finishes. Unfinished chunks are cancelled when the caller stops (an interrupt, a write
+    error), so the cluster is free for the resumed run."""
     from distributed import as_completed
 
     queue = list(reversed(tasks))
@@ -50,7 +50,6 @@ def outcomes(client: Client, tasks: Sequence[Task], slots: int) -> Iterator[Outc
             del future
             if queue:
                 done.add(submit())
-            while results:
-                yield results.pop(0)
+            yield results
     finally:
         client.cancel(list(running))

@@ -140,10 +140,12 @@ def sweep(problem: str | Path | Mapping[str, Any],
                 size = chunk_size or default_chunk_size(len(valid), sum(slots.values()))
                 tasks = [Task(source, key, tuple(group), len(grid_axes), warm)
                          for key, group in chunks(valid, size)]
-                run.estimate_after(tasks[0], len(valid), sum(slots.values()))
+                run.start(len(valid), len(tasks), sum(slots.values()))
                 with closing(outcomes(c, tasks, sum(slots.values()))) as results:
-                    for outcome in results:
-                        run.save(outcome.record, outcome.solution)
+                    for chunk in results:
+                        for outcome in chunk:
+                            run.save(outcome.record, outcome.solution)
+                        run.chunk_done()
         except StorageError as err:
             raise StorageError(_stopped(store, [p.id for p in pts], keys, err)) from None
         df = frame(store.records([p.id for p in pts]), keys)
@@ -160,39 +162,39 @@ def sweep(problem: str | Path | Mapping[str, Any],
 
 
 class _Run:
-    """The points stored so far: progress after each, the time estimate after the first
-    chunk (:mod:`~ocgroupoid.sweep.estimate`)."""
+    """The points stored so far: progress after each, the time estimate once the first chunk
+    is stored (:mod:`~ocgroupoid.sweep.estimate`)."""
 
     def __init__(self, store: SweepDir, total: int, finished: int, progress: Progress,
                  report: Callable[[str], None]) -> None:
         self.sweep_dir, self.total, self.finished = store, total, finished
         self.progress, self.report = progress, report
-        self.first: tuple[set[str], int, int] | None = None  # first chunk's ids, points, slots
-        self.solved = self.written = 0
-        self.t0 = time.perf_counter()
+        self.to_solve = self.chunks = self.slots = self.done = self.written = 0
+        self.t0: float | None = None  # when the work started
+        self.reported = False
 
-    def estimate_after(self, first: Task, points: int, slots: int) -> None:
-        """Report the time estimate once the points of ``first`` are stored (if more follow)."""
-        if points > len(first.points):
-            self.first = ({p.id for p in first.points}, points, slots)
+    def start(self, points: int, chunks: int, slots: int) -> None:
+        """The work starts: ``points`` to solve in ``chunks`` on ``slots`` task slots."""
+        self.to_solve, self.chunks, self.slots = points, chunks, slots
         self.t0 = time.perf_counter()
 
     def save(self, rec: dict[str, Any], solution: str | None) -> None:
-        """Write a point (StorageError if the disk refuses), then tell progress and, once
-        the first chunk is in, the estimate."""
+        """Write a point (StorageError if the disk refuses), then tell progress."""
         self.sweep_dir.save(rec, solution)
         self.finished += 1
         self.progress(self.finished, self.total, rec)
-        if self.first is None or rec["status"] == record.INVALID:
-            return
-        ids, points, slots = self.first
-        self.solved += 1
-        self.written += len(solution or "") + len(json.dumps(rec))
-        ids.discard(rec["id"])
-        if not ids:
-            self.first = None
-            self.report(estimate.after_first(self.solved, time.perf_counter() - self.t0,
-                                             points - self.solved, self.written, slots))
+        if self.t0 is not None:
+            self.done += 1
+            self.written += len(solution or "") + len(json.dumps(rec))
+
+    def chunk_done(self) -> None:
+        """After the first chunk, if more follow: the estimate of the time left."""
+        self.chunks -= 1
+        if self.t0 is not None and not self.reported and self.chunks > 0:
+            self.reported = True
+            self.report(estimate.after_first(self.done, time.perf_counter() - self.t0,
+                                             self.to_solve - self.done, self.written,
+                                             self.slots))
 
 
 def _stopped(store: SweepDir, ids: list[str], keys: list[str], err: StorageError) -> str:
