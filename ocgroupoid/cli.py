@@ -2,7 +2,8 @@
 
 Exit codes: 0 solved; 1 the solver failed (the solution file is still written, with
 ``success: false`` and IPOPT's status); 2 bad input (the message names the key, the line and
-the fix, never a traceback).
+the fix, never a traceback); 3 a sweep could not write (a full disk); 130 Ctrl-C and 143
+SIGTERM (a solve writes its best point so far, a sweep keeps its finished points).
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
+from ._startup import interrupt_exit_code, terminated
 from .bench.commands import bench
 from .errors import ConfigError, OcgError
 
@@ -28,6 +30,7 @@ err = Console(stderr=True, soft_wrap=True)
 
 app.add_typer(bench, name="bench")  # ocgroupoid bench work-precision | stability
 SET_HELP = "Override any key: KEY=VALUE, the value read as YAML (e.g. horizon.N=128)."
+LONG_SOLVE = 10.0  # seconds: a solve estimated longer is announced with its estimate
 
 
 def fail(message: str, code: int = 2) -> None:
@@ -118,6 +121,10 @@ def solve(
         target, picture = _solve_outputs(out_path, plot_path, f.output)
         problem = files.build(cfg)
         d = f.discretization
+        est = files.estimate(cfg, problem)
+        if est is not None and est.seconds > LONG_SOLVE and not quiet:
+            err.print(f"N={f.horizon.N}: this solve takes {est}; solver.max_seconds = "
+                      f"{f.solver.max_seconds:g}", highlight=False)
         t0 = time.perf_counter()
         if f.horizon.N == "auto":
             sol = _solve_to_accuracy(problem, f, quiet)
@@ -125,7 +132,8 @@ def solve(
             with _status("building the NLP...", quiet):
                 solver = compile_problem(problem, f.horizon.N, d.retraction, d.rule,
                                          f.solver.ipopt, d.scheme, d.steps, f.solver.jit,
-                                         f.solver.backend, bound_points=d.bound_points)
+                                         f.solver.backend, f.solver.max_seconds,
+                                         bound_points=d.bound_points)
             with _status("solving...", quiet) as status:
                 sol = solver.solve(multistart=f.solver.multistart,
                                    continuation=f.solver.continuation or None,
@@ -151,9 +159,9 @@ def solve(
                   + (f"; solution written to {target}" if target else ""))
     from rich.markup import escape
     if sol.status == "interrupted":
-        err.print("[bold red]interrupted:[/] the best point so far is "
+        err.print(f"[bold red]{_stopped_by()}:[/] the best point so far is "
                   + (f"in {target} " if target else "") + "with success: false")
-        raise typer.Exit(130)
+        raise typer.Exit(interrupt_exit_code())
     if not sol.success:
         what = "not verified" if sol.status == "Solve_Succeeded" else f"solver failed: {sol.status}"
         if sol.diagnostics.get("accuracy", {}).get("met") is False:
@@ -175,7 +183,7 @@ def _solve_to_accuracy(problem: Any, f: Any, quiet: bool) -> Any:
             progress=status.update if status is not None else _silent,
             report=_silent if quiet else lambda level: err.print(grid_line(level),
                                                                  highlight=False),
-            jit=s.jit, backend=s.backend)
+            jit=s.jit, backend=s.backend, max_seconds=s.max_seconds)
 
 
 def grid_line(level: Any) -> str:
@@ -396,7 +404,7 @@ def export_c_command(
         with _status("exporting C code...", False):
             done = export_c(files.build(cfg), out_dir, N, d.retraction, d.rule,
                             f.solver.ipopt, scheme=d.scheme, steps=d.steps, force=force,
-                            backend=f.solver.backend,
+                            backend=f.solver.backend, max_seconds=f.solver.max_seconds,
                             positive=positive_parameters(cfg.spec.parameters))
         if build:
             with _status("building with make...", False):
@@ -426,37 +434,57 @@ def sweep(
     seed: int = typer.Option(0, "--seed", help="seed of the random draws"),
     set_: list[str] = typer.Option([], "--set", help=SET_HELP),
     out_dir: Path = typer.Option(..., "--out", help="folder for the table (table.parquet), "
-                                 "the points' records and their solutions"),
+                                 "the points' records and their solutions; one sweep at a "
+                                 "time"),
     scheduler: Optional[str] = typer.Option(None, "--scheduler", help="tcp://HOST:PORT of a "
                                             "running Dask scheduler (default: a local cluster)"),
     workers: Optional[int] = typer.Option(None, "--workers", help="local worker processes "
                                           "(default: one per core)"),
-    resume: bool = typer.Option(False, "--resume", help="finish the sweep in --out without "
-                                "redoing finished points"),
+    resume: bool = typer.Option(False, "--resume", help="finish the sweep in --out (same "
+                                "grid) without redoing finished points; points whose worker "
+                                "was lost or that raised an error are solved again"),
+    retry_failed: bool = typer.Option(False, "--retry-failed", help="with --resume: solve "
+                                      "again every point that did not succeed"),
     warm: str = typer.Option("fallback", "--warm", help="neighbour warm starts: fallback (when "
                              "the cold start fails), first, or off"),
     timeout: float = typer.Option(10.0, "--timeout", help="seconds --scheduler has to answer"),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="print only errors"),
 ) -> None:
     """Solve a problem file at every point of a grid or random samples of --set overrides, on
-    Dask; one row per point in OUT/table.parquet. Exit 1 if any point failed."""
+    Dask; one row per point in OUT/table.parquet.
+
+    Before the work starts it prints the number of points and the disk they take (about
+    35 kB a point: a record and a solution), and once the first chunk is back the time the
+    rest will take. Exit codes: 0 every point solved, 1 some failed (all are in the table),
+    2 bad input (or another sweep running in OUT, or --resume of another grid), 3 a write
+    failed (a full disk: the finished points and their table are kept; --resume finishes),
+    130 interrupted (143 SIGTERM)."""
+    from .errors import STORAGE_EXIT, StorageError
     from .solve.outputs import check_folder
     from .sweep import sweep as run_sweep
     from .sweep.progress import progress_bar, summary
+
+    def report(line: str) -> None:
+        if not quiet:
+            err.print(line, highlight=False)
 
     try:
         check_folder(out_dir, "--out")
         with progress_bar(err, quiet) as bar:
             df = run_sweep(file, grid, random=random, samples=samples, seed=seed,
                            overrides=set_, out=out_dir, scheduler=scheduler, workers=workers,
-                           resume=resume, warm=warm, timeout=timeout,  # type: ignore[arg-type]
-                           progress=bar)
+                           resume=resume, retry_failed=retry_failed,
+                           warm=warm, timeout=timeout,  # type: ignore[arg-type]
+                           progress=bar, report=report)
+    except StorageError as e:
+        fail(str(e), STORAGE_EXIT)
+        return
     except OcgError as e:
         fail(str(e))
         return
     except KeyboardInterrupt:
-        fail(f"interrupted; the finished points are kept: finish with --resume --out {out_dir}",
-             130)
+        fail(f"{_stopped_by()}; the finished points are kept: finish with --resume --out "
+             f"{out_dir}", interrupt_exit_code())
         return
     if not quiet:
         out.print(summary(df) + f"\ntable written to {out_dir / 'table.parquet'}")
@@ -464,16 +492,22 @@ def sweep(
         raise typer.Exit(1)
 
 
+def _stopped_by() -> str:
+    """How the command was stopped: ``interrupted`` (Ctrl-C) or ``terminated (SIGTERM)``."""
+    return "terminated (SIGTERM)" if terminated() else "interrupted"
+
+
 def main() -> None:
-    """Entry point of the ``ocgroupoid`` command (Ctrl-C: one line, exit 130)."""
+    """Entry point of the ``ocgroupoid`` command (Ctrl-C: one line, exit 130; SIGTERM is
+    handled as Ctrl-C, exit 143)."""
     from ._startup import release
 
-    release()  # from here on Ctrl-C is a KeyboardInterrupt the commands handle
+    release()  # from here on Ctrl-C (and SIGTERM) is a KeyboardInterrupt the commands handle
     try:
         app()
     except KeyboardInterrupt:
-        err.print("interrupted", highlight=False)
-        raise SystemExit(130) from None
+        err.print(_stopped_by(), highlight=False)
+        raise SystemExit(interrupt_exit_code()) from None
 
 
 if __name__ == "__main__":  # pragma: no cover

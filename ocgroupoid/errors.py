@@ -33,3 +33,16 @@ class SolverError(OcgError, RuntimeError):
 
 class ExportError(OcgError, RuntimeError):
     """Exported C code could not be written or built (missing compiler, IPOPT, ...)."""
+
+
+class DependencyError(OcgError, ImportError):
+    """An optional dependency is not installed; the message names the extra to install."""
+
+
+class StorageError(OcgError, RuntimeError):
+    """A result could not be written (a full disk, a read-only folder); what was written
+    before stays whole. The command line exits with :data:`STORAGE_EXIT`."""
+
+
+#: the exit code of a command stopped by a StorageError (0 done, 1 failed, 2 bad input)
+STORAGE_EXIT = 3

@@ -16,6 +16,7 @@ from typer.testing import CliRunner
 
 import ocgroupoid as og
 from ocgroupoid import files
+from ocgroupoid.files import source
 from ocgroupoid.cli import app
 from ocgroupoid.errors import ConfigError, ExportError
 from ocgroupoid.export import codegen
@@ -224,19 +225,30 @@ def test_driver_refuses_inertia_outside_the_python_range(evil, tmp_path: Path, n
     assert f"{path}:2: {expected}" in r.stderr, (r.stderr, expected)
 
 
+def yaml_refusal(literal: str) -> str:
+    """What the problem files say of a number literal a double does not hold, after it."""
+    with pytest.raises(source.Refusal) as err:
+        source.parse_yaml(f"x: {literal}")
+    return err.value.message.split(literal, 1)[1]
+
+
 @needs_cc
-@pytest.mark.parametrize("text, message", [
-    ("inertia 1 2 1e-400\n", "'1e-400' underflows"),
-    ("T 1e-320\n", "'1e-320' underflows"),
-    ("T 1e400\n", "overflows a double"),
-    ("inertia 1 2 -1e400\n", "overflows a double"),
+@pytest.mark.parametrize("text, key, literal, yaml", [
+    ("inertia 1 2 1e-400\n", "inertia", "1e-400", "1.0e-400"),
+    ("T 1e-320\n", "T", "1e-320", "1.0e-320"),
+    ("T 4.9e-324\n", "T", "4.9e-324", "4.9e-324"),  # a double, but a subnormal one
+    ("T 1e400\n", "T", "1e400", "1.0e+400"),
+    ("inertia 1 2 -1e400\n", "inertia", "-1e400", "-1.0e+400"),
 ])
 def test_driver_refuses_numbers_a_double_does_not_hold(evil, tmp_path: Path, text: str,
-                                                       message: str) -> None:
+                                                       key: str, literal: str,
+                                                       yaml: str) -> None:
+    """With the problem files' message (issue 30, item 7: 4.9e-324 was "an underflow")."""
     path = tmp_path / "p.txt"
     path.write_text(text)
     r = run(evil[0].binary, str(path))
-    assert r.returncode == 2 and message in r.stderr and r.stdout == "", r.stderr
+    assert r.returncode == 2 and r.stdout == "", r.stderr
+    assert f"{path}:1: {key}: {literal}{yaml_refusal(yaml)}" in r.stderr, r.stderr
 
 
 @needs_cc

@@ -1,9 +1,11 @@
-"""A seeded mutator over every problem file (issues 15 and 19): deleted keys, wrong types and
-lengths, extreme numbers (1e300, 1e-300, huge integers, NaN-ish text), deep nesting, aliases,
-duplicate keys, bad custom expressions and bad output paths. Each mutant goes through
-``ocgroupoid check`` in-process (a few through ``solve`` with a tiny N); every run must end
-without a traceback, with an exit code in {0, 1, 2}, and no mutant known to be bad may be
-accepted with exit 0.
+"""A seeded mutator over every problem file (issues 15, 19 and 30): deleted keys, wrong types
+and lengths, extreme numbers (1e300, +-1e308, 1e-300, huge integers, NaN-ish text), deep
+nesting, aliases, duplicate keys, bad custom expressions and bad output paths. Each mutant
+goes through ``ocgroupoid check`` in-process (a few through ``solve`` with a tiny N); every
+run must end without a traceback, with an exit code in {0, 1, 2}, and no mutant known to be
+bad may be accepted with exit 0. Values of +-1e308 in the parameters and boundary values are
+bad for sure (beyond the scale double precision resolves), and N = 5000 is checked, or
+refused with its time estimate, within seconds.
 
 The cases are fixed by :data:`SEED`; a failure names the case (problem, mutation, value) so
 that it can be replayed with :func:`mutants`.
@@ -38,7 +40,7 @@ BAD_ANYWHERE = ["pi[0]", "1/0", "10.0**1000", "(-1)**0.5", "1" * 400, "u[0:3:0]"
 BAD_FOR_THREE = ["u[3]", "u + [1, 2]", "u @ u"]
 WRONG_TYPES: list[Any] = ["abc", True, None, [1, 2], {"a": 1}, [], "", [[1, 2], [3]]]
 EXTREMES: list[Any] = [1e300, -1e300, 1e-300, 10 ** 25, -(10 ** 25), float("nan"),
-                       float("inf"), -0.0, 0, -1, 2 ** 63]
+                       float("inf"), -0.0, 0, -1, 2 ** 63, 1e308, -1e308]
 NANISH = ["NaN", "nan", "inf", "-inf", "1e999", "1e300", "1.0e-400", "9" * 400, ".NaN",
           "infinity"]
 NUMERIC_SECTIONS = {"parameters", "initial", "final", "horizon", "bounds", "objective"}
@@ -210,6 +212,7 @@ class Mutator:
             (("solver", "continuation"), [10 ** 9]),
             (("solver", "continuation"), list(range(2, 12))),
             (("initial", "R"), {"quaternion": [1e300, 1e300, 1e300, 1e300]}),
+            (("initial", "R"), {"quaternion": [1e308, 0.0, 0.0, 0.0]}),
             (("final", "R"), {"rotvec": [1e200, 0.0, 0.0]})])
         node = data
         for p in key[:-1]:
@@ -293,3 +296,53 @@ def test_mutated_problem_files_solve_or_fail_cleanly(problem: Path, tmp_path) ->
         if trouble:
             failures.append(f"case {i} ({mutant.label}, --out {out!r}): {trouble}")
     assert not failures, "\n".join(failures)
+
+
+def scale_mutants(path: Path, count: int, seed: int = SEED) -> list[Mutant]:
+    """``count`` numbers of the parameters and boundary values of one problem file set to
+    +-1e308 (seeded): every one is beyond the scale the NLP resolves."""
+    m = Mutator(path, seed * 1000 + PROBLEMS.index(path))
+    paths = [p for p, v in leaves(m.base) if p and p[0] in ("parameters", "initial", "final")
+             and isinstance(v, (int, float)) and not isinstance(v, bool)]
+    out = []
+    for p in m.rng.sample(paths, min(count, len(paths))):
+        data = m.fresh()
+        value = m.rng.choice([1e308, -1e308])
+        set_at(data, p, value)
+        out.append(Mutant(f"{p} = {value!r}", dump(data), True))
+    return out
+
+
+@pytest.mark.parametrize("problem", PROBLEMS, ids=lambda p: p.stem)
+def test_values_of_1e308_are_refused_without_a_traceback(problem: Path, tmp_path) -> None:
+    failures, codes = [], []
+    for mutant in scale_mutants(problem, 6):
+        code, trouble, _ = outcome(tmp_path, mutant)
+        codes.append(code)
+        if trouble or code != 2:
+            failures.append(f"{mutant.label}: exit {code} {trouble}")
+    assert not failures, "\n".join(failures)
+    assert codes
+
+
+LARGE_N = ["plate_ball.yaml", "reaction_wheels.yaml", "heavy_top_rotors.yaml"]
+
+
+@pytest.mark.parametrize("name", LARGE_N)
+def test_N_5000_is_checked_or_refused_within_its_estimate(name: str, tmp_path) -> None:
+    """`check` at N = 5000 finishes in seconds; a `solve` whose estimate exceeds
+    solver.max_seconds is refused at once, with the estimate."""
+    problem = ROOT / "problems" / name
+    mutant = Mutant("N = 5000", dump({**Mutator(problem, 0).base,
+                                      "horizon": {**Mutator(problem, 0).base["horizon"],
+                                                  "N": 5000}}), False)
+    code, trouble, seconds = outcome(tmp_path, mutant)
+    assert code == 0 and not trouble and seconds < 30, (code, trouble, seconds)
+    (tmp_path / "mutant.yaml").write_text(mutant.text)
+    t0 = time.perf_counter()
+    r = runner.invoke(app, ["solve", str(tmp_path / "mutant.yaml"), "--set",
+                            "solver.max_seconds=5", "-q"])
+    text = " ".join(r.output.split())
+    assert r.exit_code == 2 and time.perf_counter() - t0 < 10, text
+    assert "horizon.N = 5000: a solve takes about" in text and "more than solver.max_seconds = 5" \
+        in text and "Traceback" not in r.output

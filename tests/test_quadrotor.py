@@ -227,7 +227,8 @@ def test_messages_name_the_users_symbols() -> None:
 
 def test_controls_are_checked_where_they_are_declared() -> None:
     def unused(pb: og.Problem) -> None:
-        f, tau = pb.control("f"), pb.control("tau", 3)
+        f = pb.control("f")
+        pb.control("tau", 3)
         pb.mechanics(ca.sumsqr(pb.velocity("xi")), force=ca.vertcat(0, 0, 0, 0, 0, f))
     assert "does not depend on the controls ['tau']" in messages(se3_problem, unused)
 

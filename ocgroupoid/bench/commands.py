@@ -35,7 +35,8 @@ def _fail(message: str, code: int = 2) -> None:
 @contextmanager
 def _failures(rows: Callable[[], Path]) -> Iterator[None]:
     """Errors as exit codes: a solver failure 1, bad input 2 (one line each), Ctrl-C 130
-    naming where the finished ``rows()`` are kept."""
+    (SIGTERM 143) naming where the finished ``rows()`` are kept."""
+    from .._startup import interrupt_exit_code, terminated
     from ..errors import OcgError, SolverError
 
     try:
@@ -45,7 +46,8 @@ def _failures(rows: Callable[[], Path]) -> Iterator[None]:
     except OcgError as e:
         _fail(str(e))
     except KeyboardInterrupt:
-        _fail(f"interrupted; the finished rows are kept in {rows()}", 130)
+        _fail(f"{'terminated (SIGTERM)' if terminated() else 'interrupted'}; the finished rows "
+              f"are kept in {rows()}", interrupt_exit_code())
 
 
 @bench.command("work-precision")

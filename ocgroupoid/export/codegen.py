@@ -21,7 +21,9 @@
   Python's means, IPOPT's status kept apart.
 
 - ``ocg_model.h/.c``: the dimensions and the tables the JSON writer and the parameter-file
-  reader need; ``params.txt``: the exported instance; ``Makefile`` and ``README.md``.
+  reader need (the ranges of the keys generated from :mod:`~ocgroupoid.model.ranges`, which
+  the problem files are checked against too); ``params.txt``: the exported instance;
+  ``Makefile`` and ``README.md``.
 
 One export serves every instance of the model: boundary values, physical parameters and T
 are inputs. Multi-start, continuation and the model's own guess hooks stay in Python: the
@@ -38,7 +40,6 @@ import shutil
 import subprocess
 import tempfile
 from dataclasses import dataclass
-from functools import partial
 from pathlib import Path
 from typing import Any, Collection, Sequence
 
@@ -47,11 +48,18 @@ import numpy as np
 
 from .._version import __version__
 from ..errors import ConfigError, ExportError
-from ..model import values as checks
+from ..model.ranges import (
+    FILE_BYTES,
+    POSITIVE,
+    SIGNED,
+    TIME,
+    Range,
+    block_range,
+)
 from ..model.problem import Problem
 from ..nlp.parameters import ParameterValues
 from ..nlp.schemes import DEFAULT_RULE, DEFAULT_SCHEME
-from ..nlp.transcription import C_READOUT_OUTPUTS, DEFAULT_BACKEND, Transcription
+from ..nlp.transcription import C_READOUT_OUTPUTS, DEFAULT_BACKEND, MAX_SECONDS, Transcription
 from ..solve.diagnostics import replay_of
 from ..solve.outputs import check_folder, write_atomic
 from ..solve.solver import Solver
@@ -59,7 +67,8 @@ from ..solve.verdict import REPLAY_TOLERANCE, check_tolerance
 from ..solve.verify_graph import CHECKS, FIGURES, verify_function
 
 TEMPLATES = Path(__file__).resolve().parent / "c_templates"
-VERBATIM = ("ocg_solver.h", "ocg_solver.c", "ocg_ipopt_hooks.h", "ocg_fatrop_hooks.h", "main.c")
+VERBATIM = ("ocg_solver.h", "ocg_solver.c", "ocg_ipopt_hooks.h", "ocg_fatrop_hooks.h", "main.c",
+            "ocg_params.h", "ocg_params.c")
 GENERATED = "ocg_generated"
 # Prepended to the CasADi-generated file: CasADi's uniform calling convention leaves
 # arguments (mem, iw, w) unused, and the two IPOPT calls are routed through ocg_solver.c.
@@ -252,6 +261,16 @@ def _c_doubles(values: np.ndarray) -> str:
     return "{" + ", ".join(f"{float(v):.17g}" for v in values) + "}"
 
 
+def _c_double(x: float) -> str:
+    """A double as a C literal that reads back exactly (Python's repr: ``1e-12``, ``600.0``)."""
+    return repr(float(x))
+
+
+def _c_range(r: Range) -> str:
+    """One row of ``ocg_ranges``: the range of a key (:mod:`~ocgroupoid.model.ranges`)."""
+    return f"  {{{r.kind}, {_c_double(r.lo)}, {_c_double(r.hi)}, {_c_double(r.ratio)}}}"
+
+
 def _fields(rows: list[tuple[str, int, int, int]]) -> str:
     body = ",\n".join(f"  {{{_c_string(n)}, {o}, {r}, {c}}}" for n, o, r, c in rows)
     return "{\n" + (body or "  {0, 0, 0, 0}") + "\n}"
@@ -278,20 +297,6 @@ def static_labels(pb: Problem) -> dict[str, Any]:
     return labels
 
 
-def positive_parameters(schema: type[Any]) -> list[str]:
-    """The fields of a model's ``parameters`` schema (pydantic) that must be > 0, as the
-    problem files validate them (:func:`~ocgroupoid.model.values.positive`, ``Positive3``...):
-    the exported driver applies the same ranges to its parameter file."""
-    out = []
-    for name, info in getattr(schema, "model_fields", {}).items():
-        for meta in info.metadata:
-            func = getattr(meta, "func", None)
-            if func is checks.positive or (isinstance(func, partial) and func.func is
-                                           checks.check_vector and func.keywords.get("positive")):
-                out.append(name)
-    return out
-
-
 def model_sources(tr: Transcription, default_p: np.ndarray, guess: str,
                   positive: Collection[str] = ()) -> tuple[str, str]:
     """ocg_model.h and ocg_model.c: dimensions, parameter-file keys (with the physical
@@ -314,10 +319,13 @@ def model_sources(tr: Transcription, default_p: np.ndarray, guess: str,
     if unknown:
         raise ConfigError(f"positive={sorted(unknown)}: not parameters of {pb.name!r}; "
                           f"its parameters are {list(pb.params)}")
+    flagged = [b.kind == "vector" and b.key in positive and b.key in pb.params
+               for b in values.blocks]
     blocks = ",\n".join(
         f"  {{{_c_string(b.key)}, {b.values.start}, {b.size}, {_c_string(b.meaning)}, "
-        f"{int(b.kind == 'vector' and b.key in positive and b.key in pb.params)}}}"
-        for b in values.blocks)
+        f"{int(on)}}}" for b, on in zip(values.blocks, flagged))
+    ranges = ",\n".join(_c_range(block_range(b.key, b.kind, on))
+                         for b, on in zip(values.blocks, flagged))
     defines = {
         "OCG_PROBLEM": _c_string(pb.name), "OCG_N": tr.N, "OCG_ORDER": pb.order,
         "OCG_NX": tr.nx, "OCG_NP": tr.np, "OCG_NG": tr.ng, "OCG_NV": values.size,
@@ -335,6 +343,8 @@ def model_sources(tr: Transcription, default_p: np.ndarray, guess: str,
         "OCG_N_CHECKS": len(CHECKS), "OCG_N_FIGURES": len(FIGURES),
         "OCG_CHECK_NAMES": _names(CHECKS), "OCG_FIGURE_NAMES": _names(FIGURES),
         "OCG_CHECK_FAILURES": _names([CHECK_FAILURES[c] for c in CHECKS]),
+        "OCG_PARAMS_MAX_BYTES": FILE_BYTES,
+        "OCG_RANGE_SIGNED": SIGNED, "OCG_RANGE_POSITIVE": POSITIVE, "OCG_RANGE_TIME": TIME,
     }
     header = "\n".join([
         f"/* Generated by ocgroupoid {__version__} for {plain_name(pb.name)}: the exported "
@@ -342,13 +352,22 @@ def model_sources(tr: Transcription, default_p: np.ndarray, guess: str,
         "dimensions and tables. */",
         "#ifndef OCG_MODEL_H", "#define OCG_MODEL_H", "",
         *[f"#define {k} {v}" for k, v in defines.items()], "",
+        "/* The wall time of one run of ./solve (solver.max_seconds): past it, it stops with a "
+        "message. */",
+        "#ifndef OCG_MAX_SECONDS",
+        f"#define OCG_MAX_SECONDS {_c_double(tr.max_seconds)}",
+        "#endif", "",
         "/* A key of a parameter file: numbers values[offset .. offset+size); positive: each "
         "must be > 0. */",
         "typedef struct { const char *key; int offset; int size; const char *meaning; "
         "int positive; } ocg_block;",
+        "/* The range of a key's numbers (ocgroupoid.model.ranges): kind OCG_RANGE_*, each in "
+        "[lo, hi], and at most ratio apart (0: no limit). */",
+        "typedef struct { int kind; double lo; double hi; double ratio; } ocg_range;",
         "/* A named slice of an output row: offset, and rows x cols (rows 0: a vector). */",
         "typedef struct { const char *name; int offset; int rows; int cols; } ocg_field;", "",
         "extern const ocg_block ocg_blocks[];",
+        "extern const ocg_range ocg_ranges[];",
         "extern const double ocg_default_values[];",
         "extern const ocg_field ocg_state_fields[];",
         "extern const ocg_field ocg_velocity_fields[];",
@@ -360,6 +379,7 @@ def model_sources(tr: Transcription, default_p: np.ndarray, guess: str,
         f"/* Generated by ocgroupoid {__version__} for {plain_name(pb.name)}. */",
         '#include <stddef.h>', '#include "ocg_model.h"', "",
         f"const ocg_block ocg_blocks[] = {{\n{blocks}\n}};",
+        f"const ocg_range ocg_ranges[] = {{\n{ranges}\n}};",
         f"const double ocg_default_values[] = {_c_doubles(values.values_of(default_p))};",
         f"const ocg_field ocg_state_fields[] = {_fields(state_fields)};",
         f"const ocg_field ocg_velocity_fields[] = {_fields(velocity_fields)};",
@@ -483,7 +503,7 @@ def export_c(problem: Problem | Solver, folder: str | Path, N: int = 64,
              ipopt_lib: str | Path | None = None, ipopt_include: str | Path | None = None,
              cflags: str = "", scheme: str = DEFAULT_SCHEME, steps: str = "uniform",
              force: bool = False, positive: Collection[str] = (),
-             backend: str = DEFAULT_BACKEND) -> Export:
+             backend: str = DEFAULT_BACKEND, max_seconds: float = MAX_SECONDS) -> Export:
     """Write ``problem`` compiled on N intervals as a C project in ``folder``.
 
     ``problem`` may also be a compiled :class:`Solver` (its N, scheme, retraction, rule and
@@ -499,7 +519,9 @@ def export_c(problem: Problem | Solver, folder: str | Path, N: int = 64,
     ``force=True`` overwrites whatever is there); every file is written atomically.
     ``positive`` names physical parameters whose numbers must be > 0 in a parameter file (the
     driver refuses others with the message the problem files give;
-    :func:`positive_parameters` reads them off a model's schema).
+    :func:`positive_parameters` reads them off a model's schema). ``max_seconds``: the wall
+    time of one run of ``./solve`` (IPOPT's ``max_wall_time``; the driver stops anything that
+    runs longer, e.g. fatrop).
     """
     if steps == "adaptive" or (isinstance(problem, Solver) and problem.disc.steps == "adaptive"):
         raise ConfigError("adaptive steps come from a second, phased solve placed on the "
@@ -514,7 +536,7 @@ def export_c(problem: Problem | Solver, folder: str | Path, N: int = 64,
         solver = problem
     else:
         solver = Solver(problem, N, retraction, rule, {**(ipopt or {}), **EXPORT_IPOPT}, scheme,
-                        steps, backend=backend)
+                        steps, backend=backend, max_seconds=max_seconds)
     tr = solver.transcription
     p = tr.pack()
     files: dict[str, str | bytes] = dict(_generate(tr, solver.ipopt))

@@ -1,11 +1,13 @@
-"""What a problem file may ask of this machine: N and the starts within a memory estimate, and
-IPOPT's linear solver among those that are installed.
+"""What a problem file may ask of this machine: N and the starts within a memory estimate and a
+time estimate, and IPOPT's linear solver among those that are installed.
 
 ``horizon.N`` is bounded by memory: a scheme has at most ``2 dim(y) + dim(s)`` decision
 variables per interval, and a variable costs about :data:`BYTES_PER_VARIABLE` once the stage
 graphs, the derivatives, IPOPT and MUMPS's factor exist (3-8 kB measured on the shipped
 problems at N = 10 000); every start of a multi-start keeps a few vectors of its own. The
-estimate must stay below half of the machine's memory. CasADi's IPOPT ships the linear
+estimate must stay below half of the machine's memory, and the time a solve takes (build,
+iterations per variable, starts: :func:`estimate`) below ``solver.max_seconds``: beyond, the
+problem is refused up front with the estimate. CasADi's IPOPT ships the linear
 solvers MUMPS and SPRAL; the HSL solvers (``ma27``, ``ma57``...) and Pardiso are loaded at
 run time from their libraries, which are looked for before IPOPT is asked for them (an IPOPT
 asked for a missing one reports Invalid_Option, or crashes).
@@ -20,6 +22,7 @@ import os
 import re
 import sys
 from contextlib import contextmanager, redirect_stdout
+from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 from typing import Any, Callable, Iterator
@@ -27,6 +30,7 @@ from typing import Any, Callable, Iterator
 import casadi as ca
 
 from ..errors import ConfigError
+from ..lie.rn import Rn
 from ..model.problem import Problem
 
 BYTES_PER_VARIABLE = 16_000
@@ -62,6 +66,70 @@ def check_size(pb: Problem, N: int, starts: int, where: str) -> None:
             f"variables per interval, ~{BYTES_PER_VARIABLE // 1000} kB each), more than half "
             f"of this machine's {memory_bytes() / 1e9:.3g} GB: the limit here is N <= {n_max}; "
             "lower N (use solver.continuation to reach a fine grid from coarse ones)")
+
+
+#: seconds per NLP variable on the machine the package is measured on (2 cores;
+#: ``scripts/bench_backends.py`` over every problem file, both schemes, N = 256 and 1024,
+#: ``results/bench_backends.json``; ranges in brackets): IPOPT's build (5-34 us), one
+#: interior-point iteration (2-13 us; more at larger N: 10 us for the reaction wheels at
+#: N = 5000), and fatrop's build per variable and interval (150-740 ns: it grows like N^2).
+#: The estimate is good to a factor of 2 or 3 either way: plate_ball at N = 2000 on fatrop
+#: 85 s estimated, 39 s measured; reaction_wheels at N = 5000 92 s estimated, 149 s measured
+BUILD_SECONDS = 15e-6
+ITERATION_SECONDS = 6e-6
+FATROP_BUILD_SECONDS = 300e-9
+#: iterations of the first start (measured 4-68) and of each further one (whose budget is
+#: max(30, 3 x the first's)); starts besides the perturbed ones: both geodesics and, if the
+#: model has guesses, about six of them
+FIRST_ITERATIONS, FURTHER_ITERATIONS = 40, 30
+MODEL_GUESSES = 6
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """What a solve of N intervals costs, about: the build, the first start, the starts."""
+
+    build: float
+    first: float
+    further: float
+    starts: int
+
+    @property
+    def seconds(self) -> float:
+        return self.build + self.first + (self.starts - 1) * self.further
+
+    def __str__(self) -> str:
+        return (f"about {self.seconds:.3g} s here (a build of ~{self.build:.2g} s, then "
+                f"{self.starts} start{'s' if self.starts > 1 else ''} of ~{self.first:.2g} s "
+                "or less)")
+
+
+def estimate(pb: Problem, N: int, multistart: bool | int, backend: str) -> Estimate:
+    """The time a solve of ``pb`` on N intervals takes, about (the constants above)."""
+    nx = variables_per_interval(pb) * N
+    build = nx * BUILD_SECONDS + (nx * N * FATROP_BUILD_SECONDS if backend == "fatrop" else 0)
+    starts = 1
+    if multistart is not False:
+        groups = any(not isinstance(f.group, Rn) for f in pb.groupoid.factors)
+        starts = (2 if groups else 1) + (MODEL_GUESSES if pb.guess_hook else 0) + \
+            (3 if multistart is True else int(multistart))
+    return Estimate(build, FIRST_ITERATIONS * nx * ITERATION_SECONDS,
+                    FURTHER_ITERATIONS * nx * ITERATION_SECONDS, starts)
+
+
+def check_time(pb: Problem, N: int, multistart: bool | int, backend: str, max_seconds: float,
+               where: str) -> Estimate:
+    """Refuse ``N`` intervals whose solve would take longer than ``max_seconds``
+    (``solver.max_seconds``), by :func:`estimate`; ``where`` locates ``horizon.N``."""
+    est = estimate(pb, N, multistart, backend)
+    if est.seconds > max_seconds:
+        raise ConfigError(
+            f"{where}: horizon.N = {N}: a solve takes {est}, more than solver.max_seconds = "
+            f"{max_seconds:g}; lower N (use solver.continuation to reach a fine grid from "
+            "coarse ones), solve one start (solver.multistart: false)"
+            + (", use solver.backend: ipopt (fatrop's build grows like N^2)"
+               if backend == "fatrop" else "") + ", or raise solver.max_seconds")
+    return est
 
 
 def _library(*names: str) -> bool:

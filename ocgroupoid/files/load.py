@@ -16,7 +16,8 @@ A problem file is data::
 :mod:`~ocgroupoid.files.messages`), and ``build`` turns it into a Problem. A boundary key
 left out, or written null (also per component: ``[0, 0, null]``), is free. A number in
 ``parameters``, ``initial`` and ``final`` may be written as an expression of constants, as in
-expressions: ``theta: [pi]``, ``angle: pi/2``. What the machine can take is checked too
+expressions: ``theta: [pi]``, ``angle: pi/2``. Every number lies within the scale double
+precision resolves (:mod:`~ocgroupoid.files.scale`). What the machine can take is checked too
 (:mod:`~ocgroupoid.files.limits`): N within a memory estimate, an installed linear solver.
 ``horizon.N: auto`` with ``solver.accuracy`` (or ``solver.replay_accuracy``) leaves N to the
 search of :mod:`~ocgroupoid.solve.auto` (its keys checked together by :func:`check_auto`).
@@ -41,6 +42,7 @@ from .custom import Definition, spec as custom_spec
 from .expressions import CONSTANTS, FUNCTIONS, compile_expression
 from ..nlp.schemes import SCHEME_NAMES
 from .messages import validate
+from .scale import check_scale
 from .schema import ProblemFile
 from .source import Locator, apply_override, read_yaml
 
@@ -104,6 +106,7 @@ def load(path: str | Path | None = None, overrides: list[str] | None = None,
     sections = [validate(schema, data.get(key), (key,), locate)
                 for key, schema in (("parameters", spec.parameters), ("initial", spec.initial),
                                     ("final", spec.final))]
+    check_scale(data, spec, locate)
     return Config(Path(path) if path is not None else None, top, spec, *sections, raw=data,
                   locate=locate)
 
@@ -181,7 +184,8 @@ def _only_constants(text: str) -> bool:
 
 def build(cfg: Config) -> Problem:
     """The Problem a validated Config describes: the model's, with the file's horizon,
-    objective weights and bounds."""
+    objective weights and bounds; refused when its N exceeds the memory or the time
+    (``solver.max_seconds``) a solve may take (:mod:`~ocgroupoid.files.limits`)."""
     f, locate = cfg.file, cfg.locate
     horizon = f.horizon
     pb = cfg.spec.build(cfg.parameters, cfg.initial, cfg.final, horizon.guess, cfg.name)
@@ -189,6 +193,9 @@ def build(cfg: Config) -> Problem:
         3 if f.solver.multistart is True else int(f.solver.multistart)
     limits.check_size(pb, horizon.grids[1] if horizon.N == "auto" else horizon.N, starts,
                       locate("horizon", "N"))
+    if horizon.N != "auto":  # each grid of N: auto is held to solver.max_seconds as it runs
+        limits.check_time(pb, horizon.N, f.solver.multistart, f.solver.backend,
+                          f.solver.max_seconds, locate("horizon", "N"))
     try:
         if horizon.T == "free":
             pb.horizon(horizon.guess, free=True, T_min=horizon.T_min, T_max=horizon.T_max)
@@ -201,3 +208,11 @@ def build(cfg: Config) -> Problem:
         raise ConfigError(f"{locate('horizon')}: {err}") from None
     bounds.apply(pb, f.bounds, locate)
     return pb
+
+
+def estimate(cfg: Config, pb: Problem) -> limits.Estimate | None:
+    """The time a solve of the file takes, about (None with ``horizon.N: auto``)."""
+    f = cfg.file
+    if f.horizon.N == "auto":
+        return None
+    return limits.estimate(pb, f.horizon.N, f.solver.multistart, f.solver.backend)

@@ -12,29 +12,27 @@ from pydantic import BeforeValidator, Field, StrictBool, model_validator
 from pydantic_core import PydanticCustomError
 
 from ..lie.retraction import RETRACTION_NAMES
+from ..model.ranges import T_RANGE, TIME_RANGE
 from ..model.values import Strict, number, positive
 from ..nlp.schemes import SCHEME_NAMES
-from ..nlp.transcription import BACKENDS, DEFAULT_BACKEND
+from ..nlp.transcription import BACKENDS, DEFAULT_BACKEND, MAX_SECONDS
 from ..solve.auto import ACCURACY_MAX, N_MAX, N_MIN
 
 
-#: the final times a problem file may state (seconds, or the model's unit of time): beyond
-#: them the step h = T/N under- or overflows the scaling of the NLP (SVD and LAPACK failures)
-T_RANGE = (1e-6, 1e6)
 #: perturbed starts of ``solver.multistart`` (each is a full IPOPT solve) and coarse grids
 #: of ``solver.continuation``
 MULTISTART_MAX = 1000
 CONTINUATION_MAX = 8
+#: the largest ``solver.max_seconds`` (a week)
+SECONDS_MAX = 7 * 86400.0
 
 
 def _time(v: Any, what: str = "T") -> float:
-    """A number of seconds within :data:`T_RANGE`."""
+    """A number of seconds within :data:`~ocgroupoid.model.ranges.T_RANGE`."""
     x = positive(v, what)
-    lo, hi = T_RANGE
-    if not lo <= x <= hi:
-        raise ValueError(f"{what} = {x:g} is outside [{lo:g}, {hi:g}], the range of times the "
-                         "NLP's scaling tolerates; rescale the units of time (and the "
-                         "parameters with them)")
+    message = TIME_RANGE.problem(what, [x])
+    if message is not None:
+        raise ValueError(message)
     return x
 
 
@@ -79,6 +77,15 @@ def _accuracy(v: Any) -> float:
     if not 0 < x <= ACCURACY_MAX:
         raise ValueError(f"accuracy = {x:g} is outside (0, {ACCURACY_MAX:g}]: it is the "
                          "relative error of the cost to reach, e.g. 1.0e-6")
+    return x
+
+
+def _seconds(v: Any) -> float:
+    """A wall-time limit in (0, :data:`SECONDS_MAX`] seconds."""
+    x = number(v, "max_seconds")
+    if not 0 < x <= SECONDS_MAX:
+        raise ValueError(f"max_seconds = {x:g} is outside (0, {SECONDS_MAX:g}]: it is the wall "
+                         f"time of one solve in seconds (default {MAX_SECONDS:g})")
     return x
 
 
@@ -189,6 +196,10 @@ class SolverSection(Strict):
     jit: StrictBool = Field(
         False, description="evaluate the NLP as C compiled by the system compiler (cached per "
         "structure): worth it for repeated solves (multi-start, sweeps, large N)")
+    max_seconds: Annotated[float, BeforeValidator(_seconds)] = Field(
+        MAX_SECONDS, description="wall-time limit of one solve (every start and grid; each "
+        f"grid of N: auto), in seconds, at most {SECONDS_MAX:g}: past it the best point so "
+        "far is returned with status Maximum_WallTime_Exceeded")
     backend: Literal[BACKENDS] = Field(  # type: ignore[valid-type]
         DEFAULT_BACKEND, description="the NLP solver: ipopt (the whole sparse KKT system), or "
         "fatrop (the NLP in stage form, factorised stage by stage: faster on long horizons "

@@ -21,9 +21,10 @@ from typing import Any
 import yaml
 
 from ..errors import ConfigError
+from ..model.ranges import FILE_BYTES
 
 #: what a problem file may be: bytes, nesting depth, values after expanding aliases
-LIMITS = {"bytes": 1_000_000, "depth": 32, "values": 100_000}
+LIMITS = {"bytes": FILE_BYTES, "depth": 32, "values": 100_000}
 # a number YAML 1.1 reads as text: an exponent without a dot or without a sign
 _EXPONENT_TEXT = re.compile(r"[-+]?(?:\d[\d_]*\.?[\d_]*|\.\d[\d_]*)[eE][-+]?\d+")
 _MANTISSA = re.compile(r"[-+]?[0.]*(?:[eE].*)?")  # a float literal whose digits are all 0

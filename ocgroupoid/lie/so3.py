@@ -327,7 +327,8 @@ def from_axis_angle(axis: Sequence[float], angle: float) -> np.ndarray:
     axis = np.asarray(axis, dtype=float)
     if axis.shape != (3,) or not np.all(np.isfinite(axis)) or not np.isfinite(angle):
         raise ConfigError("axis_angle needs a 3-vector axis and a finite angle")
-    n = np.linalg.norm(axis)
+    scale = float(np.max(np.abs(axis)))  # the norm of a huge axis without overflow
+    n = scale * float(np.linalg.norm(axis / scale)) if scale > 0 else 0.0
     if n < 1e-12:
         raise ConfigError("the rotation axis is zero; give a nonzero axis such as [0, 0, 1]")
     return from_rotvec(axis / n * float(angle))

@@ -88,7 +88,8 @@ def check_horizon(T: Any) -> float:
 def unit_vector(v: Any) -> list[float]:
     """Three numbers of unit length (to 1e-6), normalised."""
     vec = np.array(check_vector(v, 3))
-    n = float(np.linalg.norm(vec))
+    scale = float(np.max(np.abs(vec)))  # the norm of a huge vector without overflow
+    n = scale * float(np.linalg.norm(vec / scale)) if scale > 0 else 0.0
     if abs(n - 1.0) > 1e-6:
         raise ConfigError(f"must be a unit vector, |v| = {n:.6g}; normalise it")
     return (vec / n).tolist()

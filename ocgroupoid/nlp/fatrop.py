@@ -9,20 +9,24 @@ rows permuted into stage order and in the signatures fatrop asks for (the Hessia
 its upper triangle, with the gradient of the Lagrangian).
 
 fatrop reads the IPOPT options it shares (:data:`SHARED_OPTIONS`, :data:`RENAMED_OPTIONS`); it
-has no dual warm start (a warm start gives it the primal point) and no iteration callback.
+has no dual warm start (a warm start gives it the primal point) and no iteration callback,
+no time limit, and it loops without bound on some singular KKT systems: every solve runs in a
+helper process (:mod:`~ocgroupoid.nlp.isolated`), stopped at its deadline, after repeated
+NaN evaluations, or on Ctrl-C.
 """
 
 from __future__ import annotations
 
 import time
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Callable
 
 import casadi as ca
 import numpy as np
 
 from ..errors import ConfigError
 from .assembly import Block, assemble
+from .isolated import NAN_LIMIT, Isolated, Stopped
 from .jit import compiled
 from .stageform import NotStaged, StageForm, stage_form
 
@@ -35,6 +39,9 @@ SHARED_OPTIONS = ("tol", "max_iter", "mu_init", "bound_push", "bound_frac", "con
 RENAMED_OPTIONS = {"constr_mult_init_max": "lam_max"}
 #: what a failed fatrop solve reports (its return flag is 1 for every failure)
 FAILED = "Fatrop_Failed"
+#: what a solve reports that was stopped at its deadline (IPOPT's name for it) or by Ctrl-C
+TIMED_OUT = "Maximum_WallTime_Exceeded"
+INTERRUPTED = "interrupted"
 #: fatrop relaxes every inequality bound by this factor, as IPOPT's default
 #: ``bound_relax_factor`` (``lb - eps max(1, |lb|)``), and has no option to turn it off: the
 #: bounds it is given are tightened by as much, so that they hold at the solution to
@@ -62,7 +69,8 @@ def tightened(bounds: ca.Function) -> ca.Function:
 
 @dataclass
 class FatropResult:
-    """A solve in the original variables and rows."""
+    """A solve in the original variables and rows (``note``: why it was stopped, if it
+    was)."""
 
     x: np.ndarray
     f: float
@@ -72,6 +80,7 @@ class FatropResult:
     success: bool
     iterations: int
     seconds: float
+    note: str = ""
 
 
 def _functions(sf: StageForm, np_: int) -> tuple[dict[str, Any], dict[str, ca.Function]]:
@@ -128,6 +137,7 @@ class FatropNLP:
         except RuntimeError as err:
             raise ConfigError(f"fatrop rejected the NLP or its options: {err}; use "
                               "solver.backend: ipopt") from None
+        self._isolated = Isolated(self._solve_here)
 
     def arguments(self, x0: Any, p: Any) -> dict[str, Any]:
         """The solver's inputs in stage form, for an original point x0 and parameters p (numbers,
@@ -138,8 +148,28 @@ class FatropNLP:
         return {"x0": sf.z_of(x0), "p": p, "lbg": sf.rows_z(lbg), "ubg": sf.rows_z(ubg),
                 "lbx": lbz, "ubx": ubz}
 
-    def solve(self, x0: np.ndarray, p: np.ndarray) -> FatropResult:
-        """Run fatrop from the original point x0."""
+    def solve(self, x0: np.ndarray, p: np.ndarray, seconds: float = float("inf"),
+              stop: Callable[[], bool] = lambda: False) -> FatropResult:
+        """Run fatrop from the original point x0, in the helper process, for at most
+        ``seconds`` (status :data:`TIMED_OUT`), stopped after repeated NaN evaluations
+        (:data:`FAILED`, with a note) or once ``stop()`` is true (:data:`INTERRUPTED`)."""
+        t0 = time.perf_counter()
+        answer = self._isolated.call((x0, p), seconds, stop)
+        if isinstance(answer, Stopped):
+            status, note = {
+                "time": (TIMED_OUT, f"fatrop stopped at the time limit ({seconds:.3g} s)"),
+                "nan": (FAILED, f"fatrop stopped after {NAN_LIMIT} NaN evaluations"),
+                "stop": (INTERRUPTED, "fatrop stopped by an interrupt"),
+            }.get(answer.reason, (FAILED, f"fatrop's process died ({answer.detail})"))
+            nx = np.size(x0)
+            return FatropResult(np.asarray(x0, dtype=float), float("nan"),
+                                np.zeros(self.form.n_rows), np.zeros(nx), status, False,
+                                0, time.perf_counter() - t0, note)
+        return answer
+
+    def _solve_here(self, request: tuple[np.ndarray, np.ndarray]) -> FatropResult:
+        """The solve itself (run by the helper process)."""
+        x0, p = request
         sf = self.form
         arguments = self.arguments(x0, p)
         t0 = time.perf_counter()

@@ -20,7 +20,7 @@ import re
 import time
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Any
+from typing import Any, Callable
 
 import casadi as ca
 import numpy as np
@@ -32,7 +32,7 @@ from ..model.problem import Boundary, Problem
 from ..model.values import check_horizon
 from .assembly import Block, Kind, assemble
 from .boundary import FinalConditions
-from .fatrop import FatropNLP
+from .fatrop import INTERRUPTED, TIMED_OUT, FatropNLP
 from .jit import compiled
 from .layout import Layout, Masks
 from .parameters import ParameterValues
@@ -41,8 +41,15 @@ from .schemes.order2 import columns, stage_function
 from .schemes.order4 import GAUSS2
 from .watch import Listener, Watch
 
+#: the wall time one solve may take (seconds, ``solver.max_seconds``): IPOPT's
+#: ``max_wall_time`` for each of its runs, and the deadline of a fatrop run
+#: (:mod:`~ocgroupoid.nlp.isolated`); :class:`~ocgroupoid.solve.Solver` holds every start of
+#: one solve to it together
+MAX_SECONDS = 600.0
+
 DEFAULT_IPOPT: dict[str, Any] = {
     "tol": 1e-10,
+    "max_wall_time": MAX_SECONDS,
     "constr_mult_init_max": 0.0,  # start from zero multipliers: saves a factorisation
     "max_iter": 500,
     # a start that wanders off (|x| > 1e8: no physical velocity or state) stops at once as
@@ -171,6 +178,10 @@ class RawResult:
     backend: str = "ipopt"
 
 
+def _never() -> bool:
+    return False
+
+
 def casadi_name(name: str) -> str:
     """A valid CasADi Function name made from any problem name (a file's stem such as
     ``my-slew`` or ``2 slews``): runs of other characters than ASCII letters and digits become
@@ -232,6 +243,8 @@ class Transcription:
         except RuntimeError as err:
             raise ConfigError(f"IPOPT rejected the options {ipopt}: {err}") from None
         t3 = time.perf_counter()
+        #: the time limit of one run of the backend (IPOPT's ``max_wall_time``)
+        self.max_seconds = float({**DEFAULT_IPOPT, **(ipopt or {})}["max_wall_time"])
         self.bounds_function = self._bounds_function()
         #: the fatrop instance of the same NLP (solver.backend: fatrop), else None
         self.fatrop = FatropNLP(self.function_name, self.blocks, self.nx, self.np,
@@ -559,25 +572,34 @@ class Transcription:
         return ca.nlpsol(self.function_name, "ipopt", self.nlp, {**self._options, **WARM_IPOPT})
 
     def solve(self, guess: Guess, p: np.ndarray | None = None,
-              listener: Listener | None = None) -> RawResult:
+              listener: Listener | None = None, deadline: float | None = None,
+              stop: Callable[[], bool] | None = None) -> RawResult:
         """Run the backend from ``guess`` with parameters ``p`` (default: the problem's).
         With IPOPT, ``listener(iteration, objective, infeasibility)`` hears every iteration
         and stops IPOPT by returning True (status ``User_Requested_Stop``), and a guess with
         multipliers is a primal-dual warm start (:attr:`warm_solver`; no listener). fatrop
-        has neither: it starts from the guess's primal point, and when it fails (its Riccati
+        has neither: it starts from the guess's primal point, in a helper process that is
+        stopped at ``deadline`` (``time.monotonic()``; default: :attr:`max_seconds` from now),
+        after repeated NaN evaluations, or once ``stop()`` is true; when it fails (its Riccati
         recursion needs every stage's reduced Hessian positive definite, and regularises until
-        it is: slow or stuck on some nonconvex problems) IPOPT solves from the same start."""
+        it is: slow or stuck on some nonconvex problems) IPOPT solves from the same start
+        with the time left. A run that used up the time has status
+        ``Maximum_WallTime_Exceeded``."""
         p = self.pack() if p is None else np.asarray(p, dtype=float)
         if guess.T is not None and self.problem.T_free and guess.x is None:
             p = p.copy()
             p[self.layout.p_slices["T"]] = guess.T
         x0 = guess.x if guess.x is not None and guess.x.size == self.nx else self.point(guess, p)
+        if deadline is None:
+            deadline = time.monotonic() + self.max_seconds
         first = None
         if self.fatrop is not None:
-            first = self.fatrop.solve(x0, p)
-            if first.success:
-                return RawResult(guess.label, first.x, p, first.lam_g, first.f, first.status,
-                                 True, first.iterations, first.seconds, first.lam_x, "fatrop")
+            first = self.fatrop.solve(x0, p, deadline - time.monotonic(), stop or _never)
+            if first.success or first.status in (TIMED_OUT, INTERRUPTED):
+                cost = first.f if first.success else float(self.f_fun(first.x, p))
+                return RawResult(guess.label, first.x, p, first.lam_g, cost, first.status,
+                                 first.success, first.iterations, first.seconds, first.lam_x,
+                                 "fatrop")
         lbg, ubg, lbx, ubx = self.bounds_function(p)
         warm = self._warm(guess)
         solver, duals = self.solver, {}

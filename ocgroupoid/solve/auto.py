@@ -37,7 +37,7 @@ from typing import Any, Callable
 from ..errors import ConfigError
 from ..model.problem import Problem
 from ..nlp.schemes import DEFAULT_RULE, DEFAULT_SCHEME, SCHEME_NAMES
-from ..nlp.transcription import DEFAULT_BACKEND
+from ..nlp.transcription import DEFAULT_BACKEND, MAX_SECONDS
 from .diagnostics import replay_of
 from .guesses import interpolate
 from .richardson import estimate as richardson_estimate, observed_order
@@ -84,6 +84,7 @@ class Search:
     values: dict[str, Any]  # params, initial, final and T of every solve
     jit: bool = False
     backend: str = DEFAULT_BACKEND
+    max_seconds: float = MAX_SECONDS  # of each grid's solve
 
     def __post_init__(self) -> None:
         check_target(self.accuracy, self.replay_accuracy)
@@ -189,7 +190,7 @@ def _solve_grid(problem: Problem, scheme: str, N: int, search: Search,
     multi-start when there is none."""
     progress(f"{scheme}, N={N}: building the NLP")
     solver = Solver(problem, N, search.retraction, search.rule, search.ipopt, scheme,
-                    jit=search.jit, backend=search.backend)
+                    jit=search.jit, backend=search.backend, max_seconds=search.max_seconds)
     if search.replay_accuracy is not None and replay_of(solver.transcription).rhs is None:
         raise ConfigError(f"replay_accuracy: this problem has no replay "
                           f"({replay_of(solver.transcription).reason}); ask for accuracy "
@@ -291,12 +292,14 @@ def solve_to_accuracy(problem: Problem, accuracy: float | None = None,
                       final: dict[str, Any] | None = None, T: float | None = None,
                       progress: Progress | None = None,
                       report: Callable[[Level], None] | None = None, jit: bool = False,
-                      backend: str = DEFAULT_BACKEND) -> Solution:
+                      backend: str = DEFAULT_BACKEND, max_seconds: float = MAX_SECONDS
+                      ) -> Solution:
     """Solve on the smallest grid N = N_min 2^k whose estimated error meets ``accuracy``
     (relative cost error) and/or ``replay_accuracy`` (the replay's terminal error); see the
     module docstring. ``scheme``: one of the schemes, or ``auto``; ``multistart`` as in
     :meth:`Solver.solve`. ``progress`` hears what runs (a spinner's text); ``report`` gets
-    every grid as it is done; ``jit`` and ``backend`` as in :func:`compile`.
+    every grid as it is done; ``jit``, ``backend`` and ``max_seconds`` (of each grid's solve)
+    as in :func:`compile`.
 
     >>> sol = solve_to_accuracy(problem, accuracy=1e-6)   # doctest: +SKIP
     >>> sol.N, sol.error_estimate                         # doctest: +SKIP
@@ -306,7 +309,7 @@ def solve_to_accuracy(problem: Problem, accuracy: float | None = None,
     """
     search = Search(accuracy, replay_accuracy, retraction, rule, ipopt, multistart, N_min,
                     N_max, {"params": params, "initial": initial, "final": final, "T": T},
-                    jit, backend)
+                    jit, backend, max_seconds)
     if scheme != "auto" and scheme not in SCHEME_NAMES:
         raise ConfigError(f"unknown scheme {scheme!r}; choose one of "
                           f"{', '.join(SCHEME_NAMES)} or auto")

@@ -28,6 +28,8 @@ HINTS = {
     "boundary conditions",
     "Error_In_Step_Computation": "the KKT matrix is singular: check for redundant boundary "
     "conditions or constraints",
+    "Maximum_WallTime_Exceeded": "the solve reached solver.max_seconds: raise it, lower N, "
+    "or start closer (solver.continuation, fewer multistart starts)",
 }
 
 

@@ -9,6 +9,7 @@ first and interpolates each solution onto the next grid as its initial guess.
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, replace
 from typing import Any, Callable, Iterable, Sequence
@@ -18,7 +19,15 @@ import numpy as np
 from ..errors import ConfigError
 from ..model.problem import Problem
 from ..nlp.schemes import DEFAULT_RULE, DEFAULT_SCHEME
-from ..nlp.transcription import DEFAULT_BACKEND, Discretization, Guess, RawResult, Transcription
+from ..nlp.fatrop import TIMED_OUT
+from ..nlp.transcription import (
+    DEFAULT_BACKEND,
+    MAX_SECONDS,
+    Discretization,
+    Guess,
+    RawResult,
+    Transcription,
+)
 from ..nlp.watch import Listener
 from . import mesh, richardson
 from .guesses import as_guess, geodesic_guesses, interpolate, model_guesses, perturbed_guesses
@@ -39,11 +48,11 @@ def _noop(_: str) -> None:
     return None
 
 
-def _listener(where: str, progress: Progress, interrupt: Interrupt, budget: int | None
-              ) -> Listener:
+def _listener(where: str, progress: Progress, interrupt: Interrupt, budget: int | None,
+              deadline: float) -> Listener:
     """IPOPT's iteration callback: progress (iteration, objective, infeasibility) at most
-    every :data:`PROGRESS_EVERY` seconds; a stop once Ctrl-C was pressed or after ``budget``
-    iterations."""
+    every :data:`PROGRESS_EVERY` seconds; a stop once Ctrl-C was pressed, after ``budget``
+    iterations, or past ``deadline`` (``time.monotonic()``)."""
     last = [time.perf_counter()]
 
     def listen(iteration: int, objective: float, infeasibility: float) -> bool:
@@ -52,7 +61,8 @@ def _listener(where: str, progress: Progress, interrupt: Interrupt, budget: int 
             last[0] = now
             progress(f"{where}: iteration {iteration}, objective {objective:.6g}, "
                      f"infeasibility {infeasibility:.1e}")
-        return interrupt.requested or (budget is not None and iteration >= budget)
+        return interrupt.requested or (budget is not None and iteration >= budget) or \
+            time.monotonic() > deadline
 
     return listen
 
@@ -87,6 +97,11 @@ def distinct_minima(results: Iterable[RawResult], rtol: float = 1e-6, xtol: floa
 class Solver:
     """A compiled problem: build once, solve for any parameters, boundary values and T.
 
+    ``max_seconds`` bounds the wall time of one :meth:`solve` (every start and grid): a start
+    past it is stopped (IPOPT at its next iteration, fatrop's helper process at once,
+    :mod:`~ocgroupoid.nlp.isolated`) with status ``Maximum_WallTime_Exceeded``, the starts
+    left are skipped, and the best point so far is returned.
+
     >>> solver = compile(problem, N=64)                    # doctest: +SKIP
     >>> sol = solver.solve(params={"inertia": [2, 1, 1]})  # doctest: +SKIP
     """
@@ -94,13 +109,17 @@ class Solver:
     def __init__(self, problem: Problem, N: int, retraction: str = "cayley",
                  rule: str = DEFAULT_RULE, ipopt: dict[str, Any] | None = None,
                  scheme: str = DEFAULT_SCHEME, steps: str = "uniform", jit: bool = False,
-                 backend: str = DEFAULT_BACKEND, *, bound_points: int = 0) -> None:
+                 backend: str = DEFAULT_BACKEND, max_seconds: float = MAX_SECONDS, *,
+                 bound_points: int = 0) -> None:
         self.problem = problem
         self.ipopt = dict(ipopt or {})
         self.jit, self.backend = jit, backend
+        self.max_seconds = check_seconds(max_seconds)
+        # each IPOPT run within the solve's limit too (unless the options say otherwise)
+        self._run_options = {"max_wall_time": self.max_seconds, **self.ipopt}
         self.disc = Discretization(N, retraction, rule, scheme, steps,
                                    bound_points=bound_points)
-        self.transcription = Transcription(problem, self.disc, self.ipopt, jit, backend)
+        self.transcription = Transcription(problem, self.disc, self._run_options, jit, backend)
         self._coarse: dict[int, Transcription] = {}
         self._phased: dict[tuple[Any, ...], Transcription] = {}
 
@@ -109,7 +128,7 @@ class Solver:
             return self.transcription
         if N not in self._coarse:
             disc = replace(self.disc, N=N)
-            self._coarse[N] = Transcription(self.problem, disc, self.ipopt, self.jit,
+            self._coarse[N] = Transcription(self.problem, disc, self._run_options, self.jit,
                                             self.backend)
         return self._coarse[N]
 
@@ -167,6 +186,7 @@ class Solver:
         coarse = prev  # the grid solved before the last one (continuation)
         notes: list[str] = []  # continuation grids that landed above a coarser minimum
         adaptive: dict[str, Any] = {}
+        deadline = time.monotonic() + self.max_seconds
         with interruptible() as interrupt:
             for n in [*levels, self.disc.N]:
                 tr = self._at(n)
@@ -182,8 +202,12 @@ class Solver:
                 for i, g in enumerate(starts):
                     where = f"N={n}: start {i + 1}/{len(starts)} ({g.label})"
                     progress(where)
-                    level.append(tr.solve(g, p, _listener(where, progress, interrupt, budget)))
-                    if interrupt.requested:
+                    r = tr.solve(g, p, _listener(where, progress, interrupt, budget, deadline),
+                                 deadline, lambda: interrupt.requested)
+                    if r.status == "User_Requested_Stop" and time.monotonic() > deadline:
+                        r = replace(r, status=TIMED_OUT)
+                    level.append(r)
+                    if interrupt.requested or time.monotonic() > deadline:
                         break
                     if i == 0 and level[0].success:
                         budget = max(START_BUDGET[0], START_BUDGET[1] * level[0].iterations)
@@ -195,7 +219,7 @@ class Solver:
                     best, note = self._bridge(prev, n, best, params, initial, final, T, progress)
                     notes.append(note)
                 coarse, prev = prev, (tr, best)
-                if interrupt.requested:
+                if interrupt.requested or time.monotonic() > deadline:
                     break
             assert prev is not None
             tr, best = prev
@@ -280,7 +304,8 @@ class Solver:
             key = (phases, held)
             if key not in self._phased:
                 self._phased[key] = Transcription(
-                    self.problem, replace(self.disc, phases=phases, active=held), self.ipopt,
+                    self.problem, replace(self.disc, phases=phases, active=held),
+                    self._run_options,
                     self.jit, self.backend)
             phased = self._phased[key]
             p = phased.pack(params, initial, final, src[0].horizon(src[1].x, src[1].p))
@@ -343,21 +368,31 @@ def _higher(fine: RawResult, coarse: RawResult, gap: float) -> bool:
 
 def compile(problem: Problem, N: int = 64, retraction: str = "cayley", rule: str = DEFAULT_RULE,
             ipopt: dict[str, Any] | None = None, scheme: str = DEFAULT_SCHEME,
-            steps: str = "uniform", jit: bool = False, backend: str = DEFAULT_BACKEND, *,
-            bound_points: int = 0) -> Solver:
+            steps: str = "uniform", jit: bool = False, backend: str = DEFAULT_BACKEND,
+            max_seconds: float = MAX_SECONDS, *, bound_points: int = 0) -> Solver:
     """Build the NLP of ``problem`` on N intervals once; see :class:`Solver`. ``steps``:
     ``uniform`` (h = T/N) or ``adaptive`` (one step per interval, summing to T); ``jit``:
     evaluate the NLP's Functions as compiled C (:mod:`~ocgroupoid.nlp.jit`); ``backend``:
-    ``ipopt`` or ``fatrop`` (the stage form, :mod:`~ocgroupoid.nlp.fatrop`);
-    ``bound_points``: the bounds at this many more points inside every interval (order4)."""
-    return Solver(problem, N, retraction, rule, ipopt, scheme, steps, jit, backend,
+    ``ipopt`` or ``fatrop`` (the stage form, :mod:`~ocgroupoid.nlp.fatrop`); ``max_seconds``:
+    the wall time of one solve, every start and grid together; ``bound_points``: the bounds
+    at this many more points inside every interval (order4)."""
+    return Solver(problem, N, retraction, rule, ipopt, scheme, steps, jit, backend, max_seconds,
                   bound_points=bound_points)
 
 
 def solve(problem: Problem, N: int = 64, retraction: str = "cayley", rule: str = DEFAULT_RULE,
           ipopt: dict[str, Any] | None = None, scheme: str = DEFAULT_SCHEME,
           steps: str = "uniform", jit: bool = False, backend: str = DEFAULT_BACKEND,
-          bound_points: int = 0, **kwargs: Any) -> Solution:
+          max_seconds: float = MAX_SECONDS, bound_points: int = 0, **kwargs: Any) -> Solution:
     """Build and solve in one call; ``kwargs`` go to :meth:`Solver.solve`."""
     return compile(problem, N, retraction, rule, ipopt, scheme, steps, jit, backend,
-                   bound_points=bound_points).solve(**kwargs)
+                   max_seconds, bound_points=bound_points).solve(**kwargs)
+
+
+def check_seconds(seconds: Any, what: str = "max_seconds") -> float:
+    """A wall-time limit: a finite number of seconds > 0."""
+    if isinstance(seconds, bool) or not isinstance(seconds, (int, float)) or \
+            not math.isfinite(seconds) or seconds <= 0:
+        raise ConfigError(f"{what} must be a finite number of seconds > 0, got {seconds!r}; "
+                          f"e.g. {MAX_SECONDS:g}")
+    return float(seconds)

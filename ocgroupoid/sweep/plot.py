@@ -16,6 +16,7 @@ import numpy as np
 
 from ..errors import ConfigError
 from ..solve import write_atomic
+from . import extras
 from .store import SweepDir
 from .table import frame
 
@@ -39,6 +40,7 @@ def _lines(df: Any, key: str, keys: list[str]) -> list[np.ndarray]:
 
 def plot_sweep(folder: str | Path, path: str | Path, dpi: int = 110) -> Path:
     """Write a PNG of the sweep in ``folder`` (written by ``ocgroupoid sweep --out``)."""
+    extras.require("the figure of a sweep")
     import matplotlib
 
     matplotlib.use("Agg")

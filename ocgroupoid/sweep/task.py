@@ -22,7 +22,7 @@ from collections import OrderedDict
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal
 
-from ..errors import BoundaryError
+from ..errors import BoundaryError, ConfigError
 from ..model.problem import Problem
 from ..nlp import Guess
 from ..solve import Solution, Solver, compile, interpolate
@@ -94,7 +94,7 @@ def solver_for(structure: str, pb: Problem, cfg: Config, args: dict[str, Any]
     f = cfg.file
     # the discretization section's keys (scheme, retraction, rule, ...) are compile()'s
     solver = compile(pb, f.horizon.N, ipopt=f.solver.ipopt, jit=f.solver.jit,
-                     backend=f.solver.backend,
+                     backend=f.solver.backend, max_seconds=f.solver.max_seconds,
                      **f.discretization.model_dump())
     _solvers[structure] = solver
     _solvers.move_to_end(structure)
@@ -119,7 +119,9 @@ def neighbour(point: Point, done: dict[tuple[int, ...], tuple[str, Solution]],
 def solve_point(task: Task, point: Point, near: tuple[str, Solution] | None
                 ) -> tuple[dict[str, Any], Solution | None]:
     """Solve one point (cold and/or from ``near``, per ``task.warm``); any error becomes
-    the point's record, so one bad point never stops the chunk."""
+    the point's record, so one bad point never stops the chunk: a value the problem file
+    rejects once the problem is built (``bounds`` whose lower side exceeds the upper) is
+    INVALID, anything else ERROR."""
     from ..files import build
 
     t0 = time.perf_counter()
@@ -127,6 +129,12 @@ def solve_point(task: Task, point: Point, near: tuple[str, Solution] | None
     try:
         cfg = task.source.load(point.overrides)
         pb = build(cfg)
+    except ConfigError as err:
+        return record.failed(point, record.INVALID, str(err), time.perf_counter() - t0), None
+    except Exception as err:  # noqa: BLE001  (recorded with its type and message)
+        return record.failed(point, record.ERROR, record.describe(err),
+                             time.perf_counter() - t0), None
+    try:
         args = arguments(pb)
         solver, built = solver_for(task.structure, pb, cfg, args)
         sol, warm = _attempts(solver, cfg, args, near, task.warm)
