@@ -54,7 +54,7 @@ def test_python_m_solves_the_canonical_problem(tmp_path) -> None:
                        cwd=tmp_path)
     assert r.returncode == 0, r.stderr
     for word in ("Solve_Succeeded", "cost", "iterations", "build time",
-                 "solver time, best start", "(ipopt)", "solver time, all 5 starts",
+                 "solver time, this solution", "(ipopt)", "solver time, every run",
                  "5 starts",
                  "EL residual", "replay terminal error"):
         assert word in r.stdout

@@ -177,7 +177,7 @@ def assert_same(c: og.Solution, py: og.Solution) -> None:
     np.testing.assert_allclose(c.control_ppoly["x"], py.control_ppoly["x"], rtol=0, atol=1e-12)
     assert c.control_ppoly["c"].shape == py.control_ppoly["c"].shape
     np.testing.assert_allclose(c.control_ppoly["c"], py.control_ppoly["c"], rtol=0,
-                               atol=TOL * max(1.0, float(np.max(np.abs(py.control_ppoly["c"])))))
+                               atol=TOL * max(1.0, float(np.max(np.abs(py.control_ppoly["c"]), initial=0.0))))
     assert c.control_names == py.control_names
     np.testing.assert_allclose(c.x, py.x, rtol=0, atol=TOL)
     np.testing.assert_allclose(c.p, py.p, rtol=0, atol=1e-14)
@@ -401,7 +401,7 @@ def test_c_api_returns_error_codes_and_warm_starts(built: Built, tmp_path: Path)
     assert out["lam_x_shape"] == ["1", str(built.tr.nx)]
     assert (out["warm_unsolved"], out["warm_null"], out["warm_length"]) == (["-7"], ["-1"],
                                                                              ["-2"])
-    assert out["still_solved"] == ["1"]
+    assert out["still_solved"] == ["1" if py.success else "0"]  # unchanged by the errors
 
 
 @needs_cc
@@ -421,11 +421,11 @@ def test_valgrind_runs_the_driver_clean(built: Built, tmp_path: Path) -> None:
     suppressions.write_text("".join(
         f"{{\n   blasfeo-panel-read-{kind}\n   Memcheck:{kind}\n   obj:*libblasfeo.so*\n"
         "   ...\n}\n" for kind in ("Addr8", "Addr16", "Addr32")))
-    r = subprocess.run(["valgrind", "--error-exitcode=1", "--leak-check=full",
+    r = subprocess.run(["valgrind", "--error-exitcode=99", "--leak-check=full",
                         f"--suppressions={suppressions}",
                         "--errors-for-leak-kinds=definite", "--show-leak-kinds=definite",
                         str(built.binary)], capture_output=True, text=True, timeout=600)
-    assert r.returncode == 0, r.stderr[-4000:]
+    assert r.returncode == (0 if built.solution.success else 1), r.stderr[-4000:]
     assert "ERROR SUMMARY: 0 errors" in r.stderr
     assert json.loads(r.stdout)["status"] == built.solution.status
 
@@ -437,7 +437,7 @@ def test_failed_solve_prints_the_json_and_exits_1(tmp_path: Path) -> None:
                    cflags=CFLAGS)
     py = exp.solver.solve()
     r = run(exp.binary)
-    assert r.returncode == 1 and "IPOPT failed: Maximum_Iterations_Exceeded" in r.stderr
+    assert r.returncode == 1 and "solver failed: Maximum_Iterations_Exceeded" in r.stderr
     c = og.Solution.from_json(r.stdout)
     assert (c.success, c.status, c.iterations) == (False, py.status, py.iterations) \
         == (False, "Maximum_Iterations_Exceeded", 1)

@@ -32,9 +32,9 @@ pytestmark = pytest.mark.skipif(shutil.which("cc") is None or shutil.which("make
 
 @pytest.fixture(scope="module")
 def driver(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, og.Transcription]:
-    """The rigid-body slew exported (N = 4) and built with -Werror."""
+    """The rigid-body slew exported (N = 16: verified) and built with -Werror."""
     root = tmp_path_factory.mktemp("driver")
-    exp = export_c(og.compile(rigid_body(), N=4, ipopt=EXPORT_IPOPT), root / "c", build=True,
+    exp = export_c(og.compile(rigid_body(), N=16, ipopt=EXPORT_IPOPT), root / "c", build=True,
                    cflags="-O2 -Wall -Wextra -Werror",
                    positive=positive_parameters(MODELS["rigid_body"].parameters))
     assert exp.binary is not None

@@ -78,7 +78,8 @@ def test_the_first_order_plate_ball_on_fatrop_returns(tmp_path: Path) -> None:
                         "--out", str(tmp_path / "sol.json")],
                        capture_output=True, text=True, timeout=90, cwd=ROOT)
     seconds = time.perf_counter() - t0
-    assert r.returncode == 0, r.stderr[-2000:]
+    # solved; not verified: at N = 16 the first-order rule's long steps miss (issue 31)
+    assert r.returncode == 1 and "does not land" in r.stderr, r.stderr[-2000:]
     sol = og.Solution.from_json(tmp_path / "sol.json")
     assert sol.status == "Solve_Succeeded" and sol.starts == 11
     assert "long way round" in [m["label"] for m in sol.minima]
@@ -202,10 +203,10 @@ def test_a_long_solve_is_announced_with_its_estimate(monkeypatch) -> None:
 
     monkeypatch.setattr(cli, "LONG_SOLVE", 0.0)  # every solve is long now
     r = runner.invoke(app, ["solve", str(PROBLEMS / "so3_rest_to_rest.yaml"), "--set",
-                            "horizon.N=8", "--set", "solver.multistart=false"])
+                            "horizon.N=16", "--set", "solver.multistart=false"])
     assert r.exit_code == 0, r.output
     text = " ".join(r.output.split())
-    assert "N=8: this solve takes about" in text and "then 1 start of" in text
+    assert "N=16: this solve takes about" in text and "then 1 start of" in text
     assert "solver.max_seconds = 600" in text
 
 

@@ -22,7 +22,7 @@ from ocgroupoid.sweep import dispatch, store, table
 
 ROOT = Path(__file__).resolve().parent.parent
 SO3 = ROOT / "problems" / "so3_rest_to_rest.yaml"
-SETS = ["horizon.N=8"]
+SETS = ["horizon.N=16"]
 ANGLES = "final.R.axis_angle.angle"
 runner = CliRunner()
 
@@ -93,7 +93,7 @@ def test_resume_of_another_grid_is_refused_naming_the_difference(client: Any,
     with pytest.raises(ConfigError) as err:
         og.sweep(SO3, {ANGLES: "0.5:2:2"}, overrides=SETS, out=out, client=client, resume=True)
     assert "has 2 values (0.5, 2.0) here, 4 values (0.5, 1.0, 1.5, ...) there" in str(err.value)
-    with pytest.raises(ConfigError, match="--set is horizon.N=12 here, horizon.N=8 there"):
+    with pytest.raises(ConfigError, match="--set is horizon.N=12 here, horizon.N=16 there"):
         og.sweep(SO3, {ANGLES: "0.5:2:4"}, overrides=["horizon.N=12"], out=out, resume=True)
     r = runner.invoke(app, ["sweep", str(SO3), "--grid", "horizon.T=4:6:2", "--set", SETS[0],
                             "--out", str(out), "--resume"])
@@ -229,7 +229,9 @@ def test_finished_chunks_are_released(client: Any, tmp_path: Path) -> None:
                   client=client, chunk_size=2, progress=progress)
     assert df["success"].all() and len(held) == 24
     slots = sum(client.nthreads().values())
-    assert max(held) <= dispatch.IN_FLIGHT * slots < 12  # 12 chunks
+    # bounded by what is in flight, not by the points done (a future released a moment ago
+    # may still be registered with the client: one more)
+    assert max(held) <= dispatch.IN_FLIGHT * slots + 1 < 12  # 12 chunks
     assert min(held[-4:]) <= 1  # the last chunks: nothing else queued
 
 

@@ -284,3 +284,46 @@ def test_yaml_bounds_one_component_and_null_pairs(tmp_path) -> None:
                                  'bounds: {"xi[5]": [-1.0, 1.0]}'))
     r = CliRunner().invoke(app, ["check", str(path)])
     assert r.exit_code == 2 and "selects no component" in r.output
+
+
+def test_the_first_order_rule_on_a_coarse_grid_is_not_verified() -> None:
+    """Issue 31, case 7: the plate-ball with the seeds' first_order read-out at N = 10, 12
+    (IPOPT) 'solved' to costs 35% below the optimum; its long steps turn further than they
+    pay for. Driven through the rolling kinematics the plan misses; the rule is out of range."""
+    cfg = files.load(ROOT / "problems" / "plate_ball.yaml",
+                     ["discretization.retraction=first_order", "solver.backend=ipopt",
+                      "solver.multistart=false"])
+    pb = files.build(cfg)
+    for N in (10, 12):
+        sol = og.solve(pb, N=N, retraction="first_order", ipopt={"tol": 1e-10})
+        assert not sol.success, (N, sol.cost)
+        assert "does not land" in sol.hint and "first_order rule" in sol.hint
+    fine = og.solve(pb, N=64, retraction="first_order", ipopt={"tol": 1e-10})
+    assert fine.success and abs(fine.cost - 3.2719) <= 2e-2
+
+
+@pytest.mark.skipif(__import__("shutil").which("cc") is None, reason="no C compiler")
+@pytest.mark.parametrize("N", [5, 16])
+def test_the_exported_solver_gives_the_same_verdict(tmp_path, N: int) -> None:
+    """The single-axis turn with the rate limit, exported: the C solver's success is
+    Python's (N = 5 fails, 19% over the rate limit; N = 16 lands), and a C success lands
+    within Python's stated tolerance by our own replay."""
+    import json
+    import subprocess
+
+    solver = og.compile(turn(True), N=N, ipopt={"tol": 1e-10})
+    py = solver.solve()
+    exp = og.export_c(solver, tmp_path / "c", build=True)
+    c = json.loads(subprocess.run([str(exp.binary)], capture_output=True, text=True,
+                                  timeout=300).stdout)
+    assert c["success"] is py.success and c["status"] == py.status
+    assert c["diagnostics"]["verdict"]["verified"] is py.success
+    sol = og.Solution.from_json(json.dumps(c))
+    assert sol.success is py.success
+    if py.success:
+        angle, rate, violation = euler_replay(sol, True)
+        tol = py.diagnostics["verdict"]["tolerances"]
+        assert angle <= tol["landing"]["R"] and rate <= tol["landing"]["Omega"]
+        assert abs(c["diagnostics"]["bound_violation_max"] - violation) <= 1e-4
+    else:
+        assert c["diagnostics"]["verdict"]["failures"]

@@ -55,6 +55,7 @@ from ..model.ranges import (
     TIME,
     Range,
     block_range,
+    positive_parameters,  # noqa: F401  (re-exported: the export API names it)
 )
 from ..model.problem import Problem
 from ..nlp.parameters import ParameterValues

@@ -194,8 +194,7 @@ class Solution:
             velocities={k: np.array(v, dtype=float) for k, v in vels.items()},
             controls_t=arr(ctrl["t"]), controls=np.array(ctrl["u"], dtype=float),
             control_names=list(ctrl.get("names", [])), multipliers=d.get("multipliers", {}),
-            control_ppoly={k: np.array(v, dtype=float) for k, v in
-                           ctrl.get("ppoly", {}).items()},
+            control_ppoly=_ppoly(ctrl.get("ppoly", {})),
             diagnostics=d.get("diagnostics", {}), minima=d.get("minima", []),
             manifolds=dict(d.get("manifolds", {})), labels=dict(d.get("labels", {})),
             hint=hint, x=np.array(d.get("nlp", {}).get("x", []), dtype=float),
@@ -203,3 +202,12 @@ class Solution:
             lam_g=np.array(d.get("nlp", {}).get("lam_g", []), dtype=float),
             lam_x=np.array(d.get("nlp", {}).get("lam_x", []), dtype=float),
         )
+
+
+def _ppoly(d: dict[str, Any]) -> dict[str, np.ndarray]:
+    """A control polynomial read from JSON: ``c`` keeps its (k, pieces, m) shape when there are
+    no controls (an empty list otherwise reads as shape (0,))."""
+    out = {k: np.array(v, dtype=float) for k, v in d.items()}
+    if "c" in out and out["c"].size == 0 and "x" in out:
+        out["c"] = out["c"].reshape(0, max(out["x"].size - 1, 0), 0)
+    return out

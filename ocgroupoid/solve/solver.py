@@ -185,6 +185,7 @@ class Solver:
         prev: tuple[Transcription, RawResult] | None = None
         coarse = prev  # the grid solved before the last one (continuation)
         notes: list[str] = []  # continuation grids that landed above a coarser minimum
+        self._spent = 0.0  # solver seconds of every run of this solve: starts, grids, phases
         adaptive: dict[str, Any] = {}
         deadline = time.monotonic() + self.max_seconds
         with interruptible() as interrupt:
@@ -207,6 +208,7 @@ class Solver:
                     if r.status == "User_Requested_Stop" and time.monotonic() > deadline:
                         r = replace(r, status=TIMED_OUT)
                     level.append(r)
+                    self._spent += r.solve_seconds
                     if interrupt.requested or time.monotonic() > deadline:
                         break
                     if i == 0 and level[0].success:
@@ -250,7 +252,7 @@ class Solver:
             solution.diagnostics["error_estimate"] = richardson.estimate(
                 best.cost, coarse[1].cost, tr.N, coarse[0].N, p, p)
         return replace(solution, starts=len(results),
-                       ipopt_seconds_total=sum(r.solve_seconds for r in results))
+                       ipopt_seconds_total=self._spent)
 
     def _bridge(self, prev: tuple[Transcription, RawResult], n: int, landed: RawResult,
                 params: dict[str, Any] | None, initial: dict[str, Any] | None,
@@ -270,6 +272,7 @@ class Solver:
             p = tr.pack(params, initial, final, T)
             progress(f"N={k}: continued from N={src[0].N} (bridging)")
             r = tr.solve(interpolate(src[0], src[1].x, src[1].p, k), p)
+            self._spent += r.solve_seconds
             src = (tr, r)
         bridged = src[1]
         better = min((landed, bridged), key=lambda r: (not r.success, r.cost))
@@ -310,6 +313,7 @@ class Solver:
             phased = self._phased[key]
             p = phased.pack(params, initial, final, src[0].horizon(src[1].x, src[1].p))
             result = phased.solve(interpolate(src[0], src[1].x, src[1].p, self.disc.N), p)
+            self._spent += result.solve_seconds
             if not result.success:
                 break
             src = (phased, result)

@@ -6,9 +6,10 @@
  * Python, with the same ranges and messages (ocg_params.c): at most 1 MB of text, decimal
  * numbers a double holds, each in its key's range (T in [1e-6, 1e6], inertias, masses and
  * radii > 0, every number within the scale double precision resolves). A solve that runs
- * past solver.max_seconds is stopped. Exit codes: 0 solved, 1 the solver failed (the JSON is
- * still printed, with success false and the solver's status) or ran out of time, 2 bad input
- * (a message on stderr).
+ * past solver.max_seconds is stopped. Exit codes: 0 solved and verified (as in Python: the
+ * plan replayed through the continuous problem lands and keeps its bounds), 1 the solver failed,
+ * ran out of time or the solution did not verify (the JSON is still printed, with success false,
+ * the solver's status and diagnostics.verdict), 2 bad input (a message on stderr).
  */
 #define _POSIX_C_SOURCE 200809L
 
@@ -34,7 +35,8 @@ static int usage(FILE *out) {
   for (i = 0; i < OCG_N_BLOCKS; ++i)
     fprintf(out, "  %-16s %d number%s  %s\n", ocg_blocks[i].key, ocg_blocks[i].size,
             ocg_blocks[i].size == 1 ? " " : "s", ocg_blocks[i].meaning);
-  fprintf(out, "Exit codes: 0 solved, 1 IPOPT failed (JSON still printed), 2 bad input.\n");
+  fprintf(out, "Exit codes: 0 solved and verified, 1 not (the solver failed or the solution "
+               "did not verify; JSON still printed), 2 bad input.\n");
   return out == stdout ? 0 : 2;
 }
 
@@ -88,8 +90,12 @@ int main(int argc, char **argv) {
   if (ocg_write_json(r, stdout) != 0) {
     fprintf(stderr, "error: writing the JSON failed\n");
     code = 2;
+  } else if (code == OCG_NOT_SOLVED && ocg_status(r) == 0 /* Solve_Succeeded */) {
+    fprintf(stderr, "not verified: the solution does not pass the checks against the "
+                    "continuous problem (diagnostics.verdict in the JSON says which)\n");
+    code = 1;
   } else if (code == OCG_NOT_SOLVED) {
-    fprintf(stderr, "IPOPT failed: %s\n", ocg_status_name(r));
+    fprintf(stderr, "solver failed: %s\n", ocg_status_name(r));
     code = 1;
   }
   ocg_result_free(r);
