@@ -25,7 +25,10 @@ from ocgroupoid.export.codegen import Export, export_c, make, params_text, write
 from ocgroupoid.errors import ConfigError, ExportError
 
 ROOT = Path(__file__).resolve().parent.parent
-PROBLEMS = sorted((ROOT / "problems").glob("*.yaml"))
+#: every problem file but the minimum-time quadrotor, whose NLP is the quadrotor's with a free
+#: T (covered by quadrotor.yaml and so3_minimum_time.yaml): its build alone takes a minute
+PROBLEMS = sorted(p for p in (ROOT / "problems").glob("*.yaml")
+                  if p.stem != "quadrotor_min_time")
 # A sphere factor, a pair factor and free final components, whatever problems/ holds: the
 # heavy top with two rotors of PROBLEMS.md §2 written as a custom model.
 SPHERE_AND_PAIR = """\
@@ -89,7 +92,7 @@ def load_case(case: Case, folder: Path) -> files.Config:
     return files.load(source, [f"discretization.scheme={case.scheme}"] +
                       ([f"solver.backend={case.backend}"] if case.backend else []))
 N_TEST = 16
-CFLAGS = "-O2 -Wall -Wextra -Werror"
+from .cbuild import CFLAGS  # noqa: E402
 TOL = 1e-8  # the issue's tolerance on cost and trajectory
 VALGRIND = ["so3_rest_to_rest", "heavy_top_rotors", "plate_ball"]
 

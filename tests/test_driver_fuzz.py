@@ -15,6 +15,8 @@ import pytest
 
 import ocgroupoid as og
 from ocgroupoid.export.codegen import EXPORT_IPOPT, export_c, positive_parameters
+
+from .cbuild import CFLAGS
 from ocgroupoid.model.ranges import FILE_BYTES, block_range
 from ocgroupoid.models import MODELS
 from ocgroupoid.models.rigid_body import rigid_body
@@ -35,7 +37,7 @@ def driver(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, og.Transcrip
     """The rigid-body slew exported (N = 16: verified) and built with -Werror."""
     root = tmp_path_factory.mktemp("driver")
     exp = export_c(og.compile(rigid_body(), N=16, ipopt=EXPORT_IPOPT), root / "c", build=True,
-                   cflags="-O2 -Wall -Wextra -Werror",
+                   cflags=CFLAGS,
                    positive=positive_parameters(MODELS["rigid_body"].parameters))
     assert exp.binary is not None
     return exp.binary, exp.solver.transcription

@@ -32,7 +32,7 @@ from ocgroupoid.models.rigid_body import rigid_body
 
 ROOT = Path(__file__).resolve().parent.parent
 SO3 = ROOT / "problems" / "so3_rest_to_rest.yaml"
-CFLAGS = "-O2 -Wall -Wextra -Werror"
+from .cbuild import CFLAGS  # noqa: E402
 runner = CliRunner()
 # A name as hostile as a file name or a `name:` key can make it: a line break and a make
 # assignment that runs a command, a comment end, quotes, a trigraph, a placeholder, a

@@ -30,6 +30,8 @@ from .dubins_exact import CASES
 
 matplotlib.use("Agg")
 
+from .cbuild import CFLAGS  # noqa: E402
+
 ROOT = Path(__file__).resolve().parent.parent
 PROBLEMS = ROOT / "problems"
 N = 24
@@ -291,7 +293,7 @@ def test_the_exported_solver_writes_the_same_labels(tmp_path: Path) -> None:
     cfg = files.load(PROBLEMS / "reaction_wheels.yaml", ["horizon.N=8"])
     f, d = cfg.file, cfg.file.discretization
     exp = export_c(files.build(cfg), tmp_path / "c", 8, d.retraction, d.rule, f.solver.ipopt,
-                   build=True, scheme=d.scheme)
+                   build=True, scheme=d.scheme, cflags=CFLAGS)
     py = exp.solver.solve(multistart=False)
     r = subprocess.run([str(exp.binary)], capture_output=True, text=True, timeout=120)
     c = og.Solution.from_json(r.stdout)

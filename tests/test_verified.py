@@ -21,6 +21,8 @@ from ocgroupoid.models.rigid_body import rigid_body
 
 from . import dubins_exact as dubins
 
+from .cbuild import CFLAGS  # noqa: E402
+
 ROOT = Path(__file__).resolve().parent.parent
 THETA, A, W = 2.0, 0.5, 0.5  # turn about e3 by THETA, |u_i| <= A, |Omega_i| <= W
 #: the fastest turn about e3 alone: bang-bang, or with the rate limit accelerate-coast-brake
@@ -313,7 +315,7 @@ def test_the_exported_solver_gives_the_same_verdict(tmp_path, N: int) -> None:
 
     solver = og.compile(turn(True), N=N, ipopt={"tol": 1e-10})
     py = solver.solve()
-    exp = og.export_c(solver, tmp_path / "c", build=True)
+    exp = og.export_c(solver, tmp_path / "c", build=True, cflags=CFLAGS)
     c = json.loads(subprocess.run([str(exp.binary)], capture_output=True, text=True,
                                   timeout=300).stdout)
     assert c["success"] is py.success and c["status"] == py.status

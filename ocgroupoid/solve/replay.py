@@ -191,42 +191,55 @@ class Replay:
         """``(z0, coefficients (k m x n), steps (1 x n), P) -> (z, H, psi)``: z after every
         piece (M RK4 substeps, the input evaluated by Horner's rule in t - t_j, the running
         cost as the last state), the bound expressions at max(M, DENSE) + 1 samples of every
-        piece (their columns, piece after piece) and per piece the largest |psi| there."""
+        piece (their columns, piece after piece) and per piece the largest |psi| there.
+        The substeps and samples are loops (``mapaccum``, ``map``) over one RK4 substep and
+        one sample, not unrolled: the exported verdict's code does not grow with M."""
         key = (k, m, M, n)
         if key not in self._cache:
-            assert self.rhs is not None and self.along is not None
-            nz = self.rhs.size1_in(0)
-            z, c, h, P = (ca.SX.sym(n, d) for n, d in (("z", nz + 1), ("c", k * m), ("h", 1),
-                                                        ("P", self.rhs.size1_in(2))))
-            cm = ca.reshape(c, m, k)
-
-            def u_at(t: ca.SX) -> ca.SX:
-                u = cm[:, 0]
-                for j in range(1, k):
-                    u = u * t + cm[:, j]
-                return u
-
-            def f(zz: ca.SX, t: ca.SX) -> ca.SX:
-                u = u_at(t)
-                L = self.along(zz[:nz], u, P)[0]
-                return ca.vertcat(self.rhs(zz[:nz], u, P), L)
-
-            dt, zz = h / M, z
-            for i in range(M):
-                zz = rk4(lambda x, s, t=i * dt: f(x, t + s * dt), zz, dt)
-            # samples of the bounds and constraints: on a grid of max(M, DENSE) steps
+            substep, sample = self._substep(k, m)
+            nz1 = substep.size1_in(0)
+            z, c, h, P = (ca.MX.sym(n, d) for n, d in (("z", nz1), ("c", k * m), ("h", 1),
+                                                        ("P", substep.size1_in(4))))
             S = max(M, DENSE)
-            ds, zs = h / S, z
-            samples = [self.along(zs[:nz], u_at(0), P)]
-            for i in range(S):
-                zs = rk4(lambda x, s, t=i * ds: f(x, t + s * ds), zs, ds)
-                samples.append(self.along(zs[:nz], u_at((i + 1) * ds), P))
-            H = ca.horzcat(*[v[1] for v in samples])
-            psis = ca.horzcat(*[ca.fabs(v[2]) for v in samples])
-            psi = ca.mmax(psis) if psis.numel() else ca.SX(0, 1)
+            states = {}
+            for count in {M, S}:
+                dt = h / count
+                starts = dt * ca.DM(np.arange(count)).T
+                states[count] = substep.mapaccum(count)(z, c, starts, dt, P)
+            zz = states[M][:, -1]
+            ds = h / S
+            times = ds * ca.DM(np.arange(S + 1)).T
+            H, psis = sample.map(S + 1)(ca.horzcat(z, states[S]), c, times, P)
+            psi = ca.mmax(psis) if psis.numel() else ca.MX(0, 1)
             piece = ca.Function("piece", [z, c, h, P], [zz, H, psi])
             self._cache[key] = piece.mapaccum(n)
         return self._cache[key]
+
+    def _substep(self, k: int, m: int) -> tuple[ca.Function, ca.Function]:
+        """``substep(z, c, t0, dt, P)``: one RK4 step from t0 over dt of the state with its
+        running cost; ``sample(z, c, t, P) -> (H, |psi|)``: the bounds and constraints at a
+        state and time; the input a polynomial in t with coefficients c (highest first)."""
+        assert self.rhs is not None and self.along is not None
+        nz = self.rhs.size1_in(0)
+        z, c, t0, dt, P = (ca.SX.sym(n, d) for n, d in (
+            ("z", nz + 1), ("c", k * m), ("t0", 1), ("dt", 1), ("P", self.rhs.size1_in(2))))
+        cm = ca.reshape(c, m, k)
+
+        def u_at(t: ca.SX) -> ca.SX:
+            u = cm[:, 0]
+            for j in range(1, k):
+                u = u * t + cm[:, j]
+            return u
+
+        def f(zz: ca.SX, s: float) -> ca.SX:
+            u = u_at(t0 + s * dt)
+            L = self.along(zz[:nz], u, P)[0]
+            return ca.vertcat(self.rhs(zz[:nz], u, P), L)
+
+        substep = ca.Function("substep", [z, c, t0, dt, P], [rk4(f, z, dt)])
+        vals = self.along(z[:nz], u_at(t0), P)
+        sample = ca.Function("sample", [z, c, t0, P], [vals[1], ca.fabs(vals[2])])
+        return substep, sample
 
 
 def extreme(S: np.ndarray) -> np.ndarray:
