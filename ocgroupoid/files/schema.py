@@ -90,6 +90,7 @@ def _seconds(v: Any) -> float:
 
 
 def _nonnegative(v: Any, what: str = "value") -> float:
+    """A finite number >= 0."""
     x = number(v, what)
     if x < 0:
         raise ValueError(f"{what} must be >= 0, got {x}")
