@@ -1,5 +1,6 @@
 """The MkDocs hook (``hooks:`` in mkdocs.yml): fills every ``<!-- generated: NAME -->``
-marker of a page with the Markdown its generator writes, at build time."""
+marker of a page with the Markdown its generator writes, at build time, and shows the Sphinx
+roles of the docstrings (``:meth:`solve```) as code."""
 
 from __future__ import annotations
 
@@ -13,6 +14,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # mkdocs loads 
 from docsgen import bench, cli, schema  # noqa: E402
 
 MARKER = re.compile(r"^<!-- generated: ([\w-]+) -->$", re.MULTILINE)
+#: a Sphinx role of a docstring as mkdocstrings renders it, ``:meth:<code>~x.y</code>``
+ROLE = re.compile(r":(?:meth|func|class|data|mod|attr|exc|obj):(<code>)~?")
 GENERATORS: dict[str, Callable[[], str]] = {"problem-file-reference": schema.markdown,
                                             "cli-reference": cli.markdown, **bench.RENDERERS}
 
@@ -30,3 +33,8 @@ def fill(markdown: str, where: str = "") -> str:
 def on_page_markdown(markdown: str, page: Any, **kwargs: Any) -> str:
     """MkDocs event: the page's Markdown before it is rendered."""
     return fill(markdown, page.file.src_path)
+
+
+def on_page_content(html: str, **kwargs: Any) -> str:
+    """MkDocs event: the page's HTML; the docstrings' Sphinx roles shown as plain code."""
+    return ROLE.sub(r"\1", html)
