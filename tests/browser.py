@@ -53,12 +53,13 @@ class Browser:
         to_browser_r, self._write = os.pipe()
         self._read, from_browser_w = os.pipe()
 
+
         def onto_3_and_4() -> None:  # the browser reads commands on fd 3, answers on fd 4
             r, w = (fcntl.fcntl(fd, fcntl.F_DUPFD, 10) for fd in (to_browser_r, from_browser_w))
             os.dup2(r, 3)
             os.dup2(w, 4)
 
-        self.proc = subprocess.Popen(
+        self.proc = subprocess.Popen(  # preexec_fn: the test process starts no threads here
             [binary, *FLAGS, "--remote-debugging-pipe", f"--user-data-dir={self.profile.name}",
              "about:blank"],
             stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
@@ -69,7 +70,7 @@ class Browser:
         self._buffer = b""
         self._events: list[dict[str, Any]] = []
 
-    def __enter__(self) -> "Browser":
+    def __enter__(self) -> Browser:
         return self
 
     def __exit__(self, *exc: object) -> None:

@@ -15,9 +15,10 @@ from .scene import AXIS_COLORS, Scene
 SIZE, DPI = (6.0, 5.0), 80  # inches, dots per inch: 480 x 400 pixels
 
 
-def movie(sc: Scene, path: Path, kind: str, fps: int) -> None:
+def movie(sc: Scene, path: Path, kind: str, fps: int, dense: Scene | None = None) -> None:
     """Write every frame of ``sc`` to ``path`` as a ``gif`` or an ``mp4`` at ``fps`` frames
-    a second. DependencyError when the MP4 writer's ``ffmpeg`` is not on PATH."""
+    a second, the paths drawn from ``dense`` (the same motion sampled finer; default ``sc``).
+    DependencyError when the MP4 writer's ``ffmpeg`` is not on PATH."""
     from matplotlib import animation
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
@@ -32,7 +33,7 @@ def movie(sc: Scene, path: Path, kind: str, fps: int) -> None:
     fig = Figure(figsize=SIZE, dpi=DPI)
     FigureCanvasAgg(fig)
     ax = fig.add_subplot(projection="3d", computed_zorder=False)
-    update = _artists(ax, sc)
+    update = _artists(ax, sc, dense or sc)
     path.parent.mkdir(parents=True, exist_ok=True)
     with writer.saving(fig, str(path), DPI):
         for i in range(sc.t.size):
@@ -40,9 +41,10 @@ def movie(sc: Scene, path: Path, kind: str, fps: int) -> None:
             writer.grab_frame()
 
 
-def _artists(ax: Any, sc: Scene) -> Any:
-    """Draw what stays (limits, labels, the full paths faint) and return ``update(i)``, which
-    moves the body, its axes, the travelled paths and the plate to frame i."""
+def _artists(ax: Any, sc: Scene, dense: Scene) -> Any:
+    """Draw what stays (limits, labels, the full paths faint, from ``dense``) and return
+    ``update(i)``, which moves the body, its axes, the travelled paths and the plate to
+    frame i."""
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
     lo, hi = sc.bounds()
@@ -57,7 +59,7 @@ def _artists(ax: Any, sc: Scene) -> Any:
     ax.set_zlabel("Z")
     ax.view_init(elev=25, azim=-55)
     ax.figure.suptitle(sc.title, fontsize=10)
-    paths = sc.paths()
+    paths, now = dense.paths(), sc.paths()
     done = []
     for q, tr in zip(paths, sc.traces):
         ax.plot(q[:, 0], q[:, 1], q[:, 2], color=tr.color, alpha=0.3, lw=1)
@@ -81,8 +83,10 @@ def _artists(ax: Any, sc: Scene) -> Any:
     def update(i: int) -> None:
         R, p = sc.R[i], sc.p[i]
         centre = p + R @ np.asarray(sc.centre)
-        for line, q in zip(done, paths):
-            line.set_data_3d(q[: i + 1, 0], q[: i + 1, 1], q[: i + 1, 2])
+        k = int(np.searchsorted(dense.t, sc.t[i], side="right"))
+        for line, q, end in zip(done, paths, now):
+            q = np.vstack([q[:k], end[i]])
+            line.set_data_3d(q[:, 0], q[:, 1], q[:, 2])
         if sc.shape == "box":
             body.set_verts([centre + f @ R.T for f in _faces(np.asarray(sc.size))])
         if circles:

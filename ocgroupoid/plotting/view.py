@@ -52,7 +52,7 @@ def view(solution: Solution | str | Path, path: str | Path, frames: int | None =
         write_atomic(target, page(scene(sol, frames)))
     else:
         from .movie import movie
-        movie(scene(sol, frames or 80), target, kind, fps or 20)
+        movie(scene(sol, frames or 80), target, kind, fps or 20, dense=scene(sol))
     return target
 
 
@@ -85,7 +85,10 @@ def scene_data(sc: Scene) -> dict[str, Any]:
     lo, hi = sc.bounds()
     size = float(np.max(hi - lo)) or 1.0
     decimals = max(DIGITS - int(np.floor(np.log10(size))), 0)
-    r = lambda a: np.round(np.asarray(a, dtype=float), decimals).tolist()  # noqa: E731
+
+    def r(a: Any) -> Any:
+        return np.round(np.asarray(a, dtype=float), decimals).tolist()
+
     n = sc.t.size
     plate = None
     if sc.plate_angle is not None:
