@@ -184,6 +184,13 @@ def test_a_body_the_view_does_not_know_is_refused() -> None:
         scene(sol)
 
 
+def test_a_failed_solution_is_refused() -> None:
+    sol = so3()
+    sol.states["R"][5] = np.nan
+    with pytest.raises(ConfigError, match="the state R holds NaN"):
+        scene(sol)
+
+
 def test_api_writes_the_page(tmp_path: Path) -> None:
     out = og.view(so3(), tmp_path / "slew.html")
     assert out == tmp_path / "slew.html" and "<canvas" in out.read_text()

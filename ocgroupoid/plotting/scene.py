@@ -116,6 +116,10 @@ def scene(sol: Solution, frames: int | None = None) -> Scene:
     title = f"{sol.problem} (T = {sol.T:.4g} {names.time_unit}, cost {sol.cost:.6g})"
     common = {"title": title, "time_unit": names.time_unit, "t": t}
     by = {m: k for k, m in reversed(list(kinds.items()))}  # the first state on each manifold
+    for name, values in sol.states.items():
+        if name in by.values() and not np.all(np.isfinite(values)):
+            raise ConfigError(f"{sol.problem}: the state {name} holds NaN or infinite values "
+                              "(a failed solve?); view a solution whose states are finite")
     if "SE(3)" in by:
         return _rigid(sol, "se3", by["SE(3)"], t, common)
     if "SE(2)" in by:
@@ -216,10 +220,12 @@ def _top(sol: Solution, name: str, t: np.ndarray, common: dict[str, Any]) -> Sce
 
     Gamma = np.asarray(sol.states[name], dtype=float)
     k = list(sol.states).index(name)
-    vels = [v for key, v in sol.velocities.items()]
-    if k >= len(vels) or np.shape(vels[k])[1:] != (3,):
+    vels = list(sol.velocities.values())
+    if k >= len(vels) or np.shape(vels[k])[1:] != (3,) or len(sol.velocity_t) < 2 \
+            or not np.all(np.isfinite(vels[k])) or np.any(np.diff(sol.velocity_t) <= 0):
         raise ConfigError(f"{sol.problem}: the state {name} on S^2 has no body angular "
-                          "velocity (3 components) beside it; the view cannot turn the top")
+                          "velocity (3 finite components at increasing times) beside it; the "
+                          "view cannot turn the top")
     sub = 8  # integration steps per frame
     ts = np.linspace(t[0], t[-1], (t.size - 1) * sub + 1)
     G = curve(sol.t, Gamma, ts)
