@@ -28,7 +28,7 @@ from .lie import so3
 from .lie import SE2, SE3, SO3, se2, se3
 from .model import GuessContext, Problem
 from .nlp import Discretization, Guess, Transcription
-from .plotting import plot  # registers Solution.plot; matplotlib loads on use
+from .plotting import plot, view  # registers Solution.plot; matplotlib loads on use
 from .solve import Solution, Solver, compile, solve, solve_to_accuracy
 from .solve.simulate import Simulation, simulate
 from .sweep import sweep  # Dask, pandas and pyarrow are imported when a sweep runs
@@ -39,6 +39,6 @@ __all__ = [
     "solve_to_accuracy",
     "Solution", "OcgError", "ConfigError", "DimensionError", "SingularityError",
     "BoundaryError", "TranscriptionError", "SolverError", "export_c", "sweep", "__version__",
-    "SO3", "SE3", "SE2", "se3", "se2", "plot",
+    "SO3", "SE3", "SE2", "se3", "se2", "plot", "view",
     "simulate", "Simulation",
 ]

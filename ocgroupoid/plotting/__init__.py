@@ -4,6 +4,8 @@ target; bounds, targets and a free final time marked (see :mod:`ocgroupoid.plott
 
 ``plot(solution, path=None)`` returns the matplotlib Figure (and writes a PNG at ``path``);
 ``Solution.plot`` calls it (registered here, as this layer sits above the Solution's).
+``view(solution, path)`` writes the 3-D view of the body moving along the solution: a
+self-contained HTML page, a GIF or an MP4 (:mod:`ocgroupoid.plotting.view`).
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ from ..solve.outputs import check_file
 from ..solve.solution import Solution, write_atomic
 from .figure import figure
 from .panels import Panel, panels
+from .view import view
 
 DPI = 110
 
@@ -38,4 +41,4 @@ def plot(solution: Solution, path: str | Path | None = None, dpi: int = DPI) -> 
 
 _solution.PLOTTER = plot
 
-__all__ = ["plot", "panels", "figure", "Panel"]
+__all__ = ["plot", "panels", "figure", "Panel", "view"]
