@@ -156,7 +156,8 @@ def test_a_bound_far_from_the_values_is_drawn_off_scale_and_said(figures: dict[s
     hand = ax["controls:hand:N m"]
     values = np.concatenate([ln.get_ydata() for ln in component_lines(hand)])
     lo, hi = hand.get_ylim()
-    assert lo <= np.nanmin(values) and np.nanmax(values) <= hi and hi < 10.0
+    assert lo <= np.nanmin(values)
+    assert np.nanmax(values) <= hi < 10.0
     assert "bounds (off scale: -10, 10)" in [t.get_text() for t in hand.get_legend().get_texts()]
 
 

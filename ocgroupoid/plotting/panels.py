@@ -1,14 +1,15 @@
 """The panels of a Solution's figure, as data: what is drawn where, with which labels.
 
 Every quantity is drawn against time (``time t [s]``) with its meaning as the title, its
-symbol and unit as the y label and one legend entry per component; a quantity whose
-components have different units (an SE(3) twist, a wrench) gets one panel per unit. On top
+symbol and unit as the y label and one legend entry per component, in one panel per quantity
+group and unit (:mod:`ocgroupoid.model.units`): never two units in one panel (an SE(3)
+twist, a wrench, the quadrotor's thrust and torques are split). On top
 of these, by manifold (``Solution.manifolds``): a rotation (SO(3), the rotation of an SE(3)
 pose) gets its attitude error angle ``|log(R_T^T R(t))|`` in degrees; a direction on S^2 its
 angle to the final direction; a point of a plane (an R^2 state in one declared length unit,
 the position of an SE(2) pose) its x-y path with start and target marked; an SE(3) pose its
-position against time. Bounds are dashed lines, prescribed final values stars, a free final
-time a dotted vertical line.
+position against time. Bounds are dashed lines (off scale, and said in the legend, when far
+from the values), prescribed final values stars, a free final time a dotted vertical line.
 """
 
 from __future__ import annotations
@@ -50,7 +51,6 @@ class Panel:
     gid: str
     final_time: float | None = None  # a free final time, drawn as a vertical line
     final_time_label: str | None = None
-    unit: str | None = None  # the one unit of the y axis ("" undeclared, None: a path)
 
 
 # ------------------------------------------------------------------ geometry
@@ -176,7 +176,7 @@ def against_time(q: Quantity, t: np.ndarray, y: np.ndarray, names: Names, gid: s
             curves += _targets(T, y[-1, idx], [flags[i] for i in idx], colors)
         key = f"{group}:{unit}" if group else unit
         out.append(Panel("time", title, names.time_label, with_unit(q.symbol(idx), unit),
-                         curves, f"{gid}:{key}" if len(keys) > 1 else gid, unit=unit))
+                         curves, f"{gid}:{key}" if len(keys) > 1 else gid))
     return out
 
 
@@ -191,8 +191,7 @@ def _path(name: str, title: str, xy: np.ndarray, q: Quantity, target: bool) -> P
               Curve(x[-1:], y[-1:], label="target" if target else "end (free)", gid="target",
                     style={"marker": "*" if target else "s", "color": "C3", **point})]
     return Panel("plane", title, with_unit(q.components[0], q.units[0]),
-                 with_unit(q.components[1], q.units[1]), curves, f"path:{name}",
-                 unit=q.units[0])
+                 with_unit(q.components[1], q.units[1]), curves, f"path:{name}")
 
 
 # ------------------------------------------------------------------ per quantity
@@ -218,8 +217,7 @@ def error_panel(name: str, meaning: str, what: str, t: np.ndarray, angle: np.nda
     curves = [Curve(t, np.degrees(angle), gid=gid)]
     if whole and not missed:
         curves += _targets(float(t[-1]), np.array([0.0]), True, ["C0"])
-    return Panel("time", title, names.time_label, f"{what} error angle [deg]", curves, gid,
-                 unit="deg")
+    return Panel("time", title, names.time_label, f"{what} error angle [deg]", curves, gid)
 
 
 def state_panels(sol: Any, names: Names, name: str) -> list[Panel]:
