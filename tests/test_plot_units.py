@@ -241,6 +241,14 @@ def test_a_control_declares_its_unit_meaning_and_group() -> None:
             "tau2", 3, unit=["N m", "N m"])
 
 
+def test_a_problem_file_declares_the_units_of_controls_of_their_own() -> None:
+    """``controls: {f: 1, tau: 3}`` described by name: the built-in quadrotor's units."""
+    labels = files.build(files.load(ROOT / "tests" / "data" / "custom_quadrotor.yaml", [])
+                         ).labels()["controls"]
+    assert labels["units"] == quadrotor().labels()["controls"]["units"]
+    assert labels["meanings"] == {"f": "thrust along body z", "tau": "body torques"}
+
+
 def test_undeclared_units_default_by_factor() -> None:
     """A rotation in rad and rad/s, a pose's translation in m and m/s, a vector state's
     velocity in its state's unit per time unit (minutes here)."""
