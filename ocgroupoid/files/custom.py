@@ -28,8 +28,8 @@ control by its name). ``path`` entries are ``expression <= 0``, or comparisons
 ``lhs <= rhs``, ``lhs >= rhs`` and ``lhs == rhs`` (an equality path constraint). Without a Lagrangian,
 ``controls`` maps names to expressions. ``order: 1`` gives a first-order problem
 ``min int cost(q, y) dt`` subject to the constraints. The optional ``describe`` maps names to
-their unit (``x: m``) or to ``{meaning, unit, components}`` for plots and solution files
-(:meth:`~ocgroupoid.model.problem.Problem.describe`).
+their unit (``x: m``) or to ``{meaning, unit, components, group}`` for plots and solution
+files (:meth:`~ocgroupoid.model.problem.Problem.describe`).
 """
 
 from __future__ import annotations
@@ -49,6 +49,7 @@ from ..lie import SE2, SE3, SO3
 from ..model.problem import Problem
 from ..model.values import Strict, check_vector, vector
 from ..models.registry import ModelSpec
+from .described import Described, UnitText
 from .expressions import CONSTANTS, FUNCTIONS, compile_expression
 
 
@@ -64,15 +65,6 @@ class FactorDefinition(Strict):
     side: Literal["body", "spatial"] = Field(
         "body", description="so3, se3, se2 only: body g_{k+1} = g_k w_k or spatial "
         "g_{k+1} = w_k g_k")
-
-
-class Described(Strict):
-    """One entry of ``definition.describe``: what a quantity means and its unit."""
-
-    meaning: str | None = Field(None, description="what the quantity is (plot titles)")
-    unit: str | list[str] | None = Field(
-        None, description="one unit for every component, or a list of one per component")
-    components: list[str] | None = Field(None, description="one label per component (legend)")
 
 
 class Definition(Strict):
@@ -100,10 +92,10 @@ class Definition(Strict):
         "expression <= 0) or a comparison 'lhs <= rhs', 'lhs >= rhs', 'lhs == rhs', imposed "
         "wherever the scheme evaluates its constraints (a keep-out cone, R e3 == e3)")
     terminal_cost: str | None = Field(None, description="Mayer term on the final node")
-    describe: dict[str, Described | str] = Field(
+    describe: dict[str, Described | UnitText] = Field(
         default_factory=dict, description="optional names and units for plots and solution "
-        "files: name: unit, or name: {meaning, unit, components}; a name is a state, a "
-        "velocity, a control, u (all the controls), a constraint (its multipliers) or t")
+        "files: name: unit, or name: {meaning, unit, components, group}; a name is a state, "
+        "a velocity, a control, u (all the controls), a constraint (its multipliers) or t")
 
 
 GROUPS = {"so3": SO3, "se3": SE3, "se2": SE2}  # the group factor types
@@ -239,7 +231,7 @@ def _problem(d: Definition, G: Groupoid, params: BaseModel, initial: BaseModel,
     for qname, entry in d.describe.items():
         e = Described(unit=entry) if isinstance(entry, str) else entry
         try:
-            pb.describe(qname, e.meaning, e.unit, e.components)
+            pb.describe(qname, e.meaning, e.unit, e.components, e.group)
         except ConfigError as err:
             raise ConfigError(f"{where('definition', 'describe', qname)}: {err}") from None
     for cname, text in d.path.items():

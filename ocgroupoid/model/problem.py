@@ -33,6 +33,7 @@ from ..groupoid.base import Factor
 from ..groupoid.product import Groupoid
 from .mechanics import Mechanics, control_rank, split
 from .symbols import foreign_message, symbol_labels
+from .units import Description, control_labels, default_description, describe
 from .values import check_horizon, check_vector, number
 
 
@@ -79,21 +80,6 @@ class Inequality:
     expr: ca.SX
     lower: ca.SX
     upper: ca.SX
-
-
-@dataclass(frozen=True)
-class Description:
-    """What a reported quantity means (:meth:`Problem.describe`): a meaning, and one label and
-    one unit per component ("" where no unit was declared)."""
-
-    kind: str  # the section of the labels: time, states, velocities, controls, multipliers
-    meaning: str
-    components: tuple[str, ...]
-    units: tuple[str, ...]
-
-    def as_dict(self) -> dict[str, Any]:
-        return {"meaning": self.meaning, "components": list(self.components),
-                "units": list(self.units)}
 
 
 @dataclass
@@ -192,12 +178,16 @@ class Problem:
         """Whether the controls are decision variables of their own (:meth:`control`)."""
         return bool(self.inputs)
 
-    def control(self, name: str, size: int = 1) -> ca.SX:
+    def control(self, name: str, size: int = 1, unit: str | Sequence[str] | None = None,
+                meaning: str | None = None, components: Sequence[str] | None = None,
+                group: str | Sequence[str] | None = None) -> ca.SX:
         """Declare a control as a variable of its own (second-order problems), e.g. a thrust
         ``f`` and body torques ``tau`` (size 3); returns its symbol. The generalised force it
         exerts is any expression of the state and the controls, given to
         :meth:`mechanics` as ``force=``; the cost, bounds and constraints read it by name.
-        Its components are reported as ``name`` (size 1) or ``name1 .. name<size>``."""
+        Its components are reported as ``name`` (size 1) or ``name1 .. name<size>``;
+        ``unit``, ``meaning``, ``components`` and ``group`` describe it as
+        :meth:`describe` does (``pb.control("tau", 3, unit="N m", meaning="body torques")``)."""
         if self.order != 2:
             raise ConfigError(f"control {name!r}: controls of their own drive second-order "
                               "problems (mechanics); in a first-order problem the velocities "
@@ -214,10 +204,15 @@ class Problem:
                               "velocity or control of this problem; choose another")
         if isinstance(size, bool) or not isinstance(size, (int, np.integer)) or size < 1:
             raise ConfigError(f"control {name!r}: size is an integer >= 1, got {size!r}")
+        described = any(v is not None for v in (unit, meaning, components, group))
+        desc = describe("controls", int(size), name, meaning, unit, components, group) \
+            if described else None  # checked before the control is declared
         sym = ca.SX.sym(name, int(size))
         self.inputs[name] = sym
         names = [name] if size == 1 else [f"{name}{i + 1}" for i in range(int(size))]
         self.controls += list(zip(names, ca.vertsplit(sym)))
+        if desc is not None:
+            self.descriptions[name] = desc
         return sym
 
     @property
@@ -608,7 +603,8 @@ class Problem:
 
     def describe(self, name: str, meaning: str | None = None,
                  unit: str | Sequence[str] | None = None,
-                 components: Sequence[str] | None = None) -> None:
+                 components: Sequence[str] | None = None,
+                 group: str | Sequence[str] | None = None) -> None:
         """Say what ``name`` means and its unit, for plots and solution files::
 
             pb.describe("Omega", "body angular velocity", "rad/s",
@@ -617,26 +613,17 @@ class Problem:
         ``name`` is a state, a velocity, a control, ``u`` (all the controls), a constraint
         (its multipliers) or ``t`` (the time axis; "s" unless declared). ``unit`` is one
         string for every component or a list of one per component; ``components`` labels
-        each component (the legend). A vector state's components are its entries; a group
-        state's are its tangent coordinates, in its velocity's order (SO(3): 3 angles; SE(3):
-        3 angles, then the position; SE(2): the heading, then x, y). A later call for the same
-        name replaces an earlier one.
+        each component (the legend); ``group`` (one string, or one per component) names the
+        quantity group a component is drawn with: a figure has one panel per (group, unit)
+        of a quantity, so components of one unit in different groups get panels of their
+        own. A vector state's components are its entries; a group state's are its tangent
+        coordinates, in its velocity's order (SO(3): 3 angles; SE(3): 3 angles, then the
+        position; SE(2): the heading, then x, y). A later call for the same name replaces an
+        earlier one. Undescribed states and velocities of group factors get their units by
+        default (:mod:`ocgroupoid.model.units`).
         """
         kind, n = self._quantity(name)
-        what = f"describe({name!r})"
-        if meaning is not None and not isinstance(meaning, str):
-            raise ConfigError(f"{what}: the meaning is a string, got {meaning!r}")
-        meaning = meaning or name
-        units = self._per_component(unit, n, "unit", name, repeat=True) or [""] * n
-        labels = self._per_component(components, n, "component", name, repeat=False) or \
-            ([meaning] if n == 1 else [f"{name}{i + 1}" for i in range(n)])
-        if kind == "time" and components is not None:
-            raise ConfigError(f"{what}: the time axis has no components; give a meaning and "
-                              "a unit")
-        if len(set(labels)) != len(labels):
-            raise ConfigError(f"{what}: component labels must differ (one legend entry "
-                              f"each), got {labels}")
-        self.descriptions[name] = Description(kind, meaning, tuple(labels), tuple(units))
+        self.descriptions[name] = describe(kind, n, name, meaning, unit, components, group)
 
     def _quantity(self, name: str) -> tuple[str, int]:
         """The labels section ``name`` belongs to and its number of components."""
@@ -668,28 +655,6 @@ class Problem:
             "once mechanics(), report_controls() or subject_to() declared them: describe "
             "them after")
 
-    @staticmethod
-    def _per_component(value: Any, n: int, what: str, name: str, repeat: bool
-                       ) -> list[str] | None:
-        """None, or n strings: a list of n, or (``repeat``) one string for all of them."""
-        where = f"describe({name!r})"
-        if value is None:
-            return None
-        if isinstance(value, str):
-            if repeat or n == 1:
-                return [value] * n
-            raise ConfigError(f"{where}: {name} has {n} components, so the {what} labels are "
-                              f"a list of {n}, got the string {value!r}")
-        items = list(value) if isinstance(value, (list, tuple)) else None
-        if items is None or not all(isinstance(v, str) for v in items):
-            raise ConfigError(f"{where}: the {what}s are strings (a list of {n}), got "
-                              f"{value!r}")
-        if len(items) != n:
-            hint = "one string for all of them or " if repeat else ""
-            raise ConfigError(f"{where}: {name} has {n} component{'s' * (n != 1)}, got "
-                              f"{len(items)} {what}s {items}; give {hint}a list of {n}")
-        return items
-
     def labels(self, P: Any = None) -> dict[str, Any]:
         """Names and units of everything a Solution reports, JSON-ready (``Solution.labels``).
 
@@ -709,23 +674,15 @@ class Problem:
             out["time"]["free"] = [_finite(v) for v in self.T_bounds]
         for kind in ("states", "velocities", "multipliers"):
             out[kind] = {n: v.as_dict() for n, v in d.items() if v.kind == kind}
+        for f in self.groupoid.factors:  # the defaults of what the model left undescribed
+            for kind, n in (("states", f.state), ("velocities", f.velocity)):
+                default = default_description(f, kind, out["time"]["unit"], d.get(f.state))
+                if n not in d and default is not None:
+                    out[kind][n] = default.as_dict()
         names = [n for n, _ in self.controls]
         if names:
-            group = d.get("u") if "u" not in names else None
-            comps = list(group.components) if group else list(names)
-            units = list(group.units) if group else [""] * len(names)
-            k = 0
-            for n, sym in self.inputs.items():  # a described control of its own (tau)
-                if n in d and d[n].kind == "controls" and sym.numel() > 1:
-                    comps[k:k + sym.numel()] = d[n].components
-                    units[k:k + sym.numel()] = d[n].units
-                k += sym.numel()
-            for j, n in enumerate(names):
-                if n in d and d[n].kind == "controls":
-                    comps[j], units[j] = d[n].components[0], d[n].units[0]
-            one = d.get(names[0]) if len(names) == 1 else None  # a single control
-            meaning = group.meaning if group else one.meaning if one else "controls"
-            out["controls"] = {"meaning": meaning, "components": comps, "units": units}
+            out["controls"] = control_labels(
+                names, {n: sym.numel() for n, sym in self.inputs.items()}, d)
         out["final"] = {**{f.state: _prescribed(self.end.states.get(f.state))
                            for f in self.groupoid.factors},
                         **{f.velocity: _prescribed(self.end.velocities.get(f.velocity))

@@ -59,7 +59,10 @@ def quadrotor(m: float = MASS, J: Sequence[float] = INERTIA, gravity: float = GR
     grav = pb.parameter("gravity", 1, gravity, "gravitational acceleration")
     fmax = pb.parameter("f_max", 1, f_max, "largest thrust")
     taumax = pb.parameter("tau_max", 1, tau_max, "largest body torque about each axis")
-    f, tau = pb.control("f"), pb.control("tau", 3)
+    axes = ("body x", "body y", "body z")
+    f = pb.control("f", unit="N", meaning="thrust along body z")
+    tau = pb.control("tau", 3, unit="N m", meaning="body torques",
+                     components=[f"torque τ{i} about {a}" for i, a in zip("123", axes)])
     xi, pose = pb.velocity("xi"), pb.node_state("g")
     omega, v = xi[:3], xi[3:]
     height = pose[2, 3]
@@ -69,15 +72,17 @@ def quadrotor(m: float = MASS, J: Sequence[float] = INERTIA, gravity: float = GR
     pb.minimize((f - mass * grav) ** 2 + ca.sumsqr(tau))
     pb.bound(f, 0, fmax, name="f")
     pb.bound(tau, -taumax, taumax, name="tau")
-    axes = ("body x", "body y", "body z")
     pb.describe("g", "pose", ["rad"] * 3 + ["m"] * 3,
                 components=[*(f"about {a}" for a in axes), "x", "y", "z"])
     pb.describe("xi", "body twist", ["rad/s"] * 3 + ["m/s"] * 3,
                 components=[*(f"ω{i} about {a}" for i, a in zip("123", axes)),
                             *(f"v{i} along {a}" for i, a in zip("123", axes))])
-    pb.describe("f", "thrust along body z", "N")
-    pb.describe("u", "thrust and body torques", ["N", "N m", "N m", "N m"],
-                components=["thrust f", *(f"torque τ{i} about {a}" for i, a in zip("123", axes))])
+    pb.describe("Phi", "equations of motion",
+                components=[*(f"λ{i} of the torque equation about {a}"
+                              for i, a in zip("123", axes)),
+                            *(f"λ{i} of the force equation along {a}"
+                              for i, a in zip("456", axes))],
+                group=["rotation"] * 3 + ["translation"] * 3)
     pb.initial(g=g0, xi=xi0)
     pb.final(g=gT, xi=xiT)
     pb.horizon(T)

@@ -1,6 +1,7 @@
-"""Figures of a Solution for engineers: every quantity against time with its meaning, unit
-and one legend entry per component; attitude errors to the target, x-y paths with start and
-target; bounds, targets and a free final time marked (see :mod:`ocgroupoid.plotting.panels`).
+"""Figures of a Solution for engineers: every quantity against a shared time axis, one panel
+per quantity group and unit, with its meaning, unit and one legend entry per component;
+attitude errors to the target, x-y paths with start and target; bounds, targets and a free
+final time marked (see :mod:`ocgroupoid.plotting.panels`).
 
 ``plot(solution, path=None)`` returns the matplotlib Figure (and writes a PNG at ``path``);
 ``Solution.plot`` calls it (registered here, as this layer sits above the Solution's).

@@ -5,7 +5,7 @@ before it was recorded."""
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Sequence
 
 import numpy as np
@@ -15,19 +15,31 @@ ANGLES = {"rad", "deg", "°", "rev"}  # units of an R^2 state that is not a poin
 
 @dataclass(frozen=True)
 class Quantity:
-    """A reported quantity: its symbol, meaning, and one label and unit per component."""
+    """A reported quantity: its symbol, meaning, and one label, unit and quantity group per
+    component; ``symbols`` (per component) and ``meanings`` (per symbol) when it gathers
+    several declared quantities (the controls: a thrust f and torques tau)."""
 
     name: str
     meaning: str
     components: list[str]
     units: list[str]
+    groups: list[str] = field(default_factory=list)
+    symbols: list[str] = field(default_factory=list)
+    meanings: dict[str, str] = field(default_factory=dict)
 
-    def by_unit(self) -> list[tuple[str, list[int]]]:
-        """The components grouped by unit, in order of first appearance: one panel each."""
-        groups: dict[str, list[int]] = {}
-        for i, u in enumerate(self.units):
-            groups.setdefault(u, []).append(i)
-        return list(groups.items())
+    def panels(self) -> list[tuple[str, str, list[int]]]:
+        """The components by (group, unit), in order of first appearance: one panel each
+        (never two units in one panel)."""
+        groups = self.groups or [""] * len(self.units)
+        out: dict[tuple[str, str], list[int]] = {}
+        for i, key in enumerate(zip(groups, self.units)):
+            out.setdefault(key, []).append(i)
+        return [(g, u, idx) for (g, u), idx in out.items()]
+
+    def symbol(self, idx: list[int]) -> str:
+        """The symbol of components ``idx``: the one they share, else the quantity's."""
+        syms = {self.symbols[i] for i in idx} if self.symbols else set()
+        return syms.pop() if len(syms) == 1 else self.name
 
 
 def with_unit(text: str, unit: str) -> str:
@@ -77,27 +89,31 @@ class Names:
         free = self.sol.discretization.get("T_range") or self.labels.get("time", {}).get("free")
         return list(free) if free else None
 
-    def quantity(self, kind: str, name: str, n: int, defaults: Sequence[str] | None = None
-                 ) -> Quantity:
+    def quantity(self, kind: str, name: str, n: int, defaults: Sequence[str] | None = None,
+                 units: Sequence[str] | None = None) -> Quantity:
         """A state, velocity or multiplier group of n components: as described, else named
-        after its symbol (``Omega1``...) with no unit."""
+        ``defaults`` (or after its symbol: ``Omega1``...) in ``units`` (or no unit)."""
         d = self.labels.get(kind, {}).get(name)
         if d and len(d.get("components", [])) == n and len(d.get("units", [])) == n:
             return Quantity(name, d.get("meaning") or name, list(d["components"]),
-                            list(d["units"]))
+                            list(d["units"]), _groups(d, n))
         comps = list(defaults) if defaults else \
             ([name] if n == 1 else [f"{name}{i + 1}" for i in range(n)])
-        return Quantity(name, name, comps, [""] * n)
+        return Quantity(name, name, comps, list(units) if units else [""] * n)
 
     def controls(self) -> Quantity:
+        """All the controls, with the symbol (f, tau) and group of each, as declared."""
         names = list(self.sol.control_names) or \
             [f"u{i + 1}" for i in range(self.sol.controls.shape[1])]
+        n = len(names)
         d = self.labels.get("controls")
-        symbol = names[0] if len(names) == 1 else "u"
-        if d and len(d.get("components", [])) == len(names):
+        symbol = names[0] if n == 1 else "u"
+        if d and len(d.get("components", [])) == n:
+            symbols = d.get("symbols") if len(d.get("symbols") or []) == n else names
             return Quantity(symbol, d.get("meaning") or "controls", list(d["components"]),
-                            list(d["units"]))
-        return Quantity(symbol, "controls", names, [""] * len(names))
+                            list(d["units"]), _groups(d, n), list(symbols),
+                            dict(d.get("meanings") or {}))
+        return Quantity(symbol, "controls", names, [""] * n, symbols=names)
 
     def final(self, name: str) -> bool | list[bool]:
         """Whether the final value of a state was prescribed (per component for R^n); a file
@@ -138,3 +154,9 @@ class Names:
         ``diagnostics.final_residual``: an angle in rad for rotations and directions); 0 when
         not recorded."""
         return float((self.sol.diagnostics.get("final_residual") or {}).get(name, 0.0))
+
+
+def _groups(d: dict[str, Any], n: int) -> list[str]:
+    """The quantity groups of a labels entry: one per component ("" where none declared)."""
+    groups = d.get("groups") or []
+    return [str(g) for g in groups] if len(groups) == n else [""] * n

@@ -1,14 +1,15 @@
 """The panels of a Solution's figure, as data: what is drawn where, with which labels.
 
 Every quantity is drawn against time (``time t [s]``) with its meaning as the title, its
-symbol and unit as the y label and one legend entry per component; a quantity whose
-components have different units (an SE(3) twist, a wrench) gets one panel per unit. On top
+symbol and unit as the y label and one legend entry per component, in one panel per quantity
+group and unit (:mod:`ocgroupoid.model.units`): never two units in one panel (an SE(3)
+twist, a wrench, the quadrotor's thrust and torques are split). On top
 of these, by manifold (``Solution.manifolds``): a rotation (SO(3), the rotation of an SE(3)
 pose) gets its attitude error angle ``|log(R_T^T R(t))|`` in degrees; a direction on S^2 its
 angle to the final direction; a point of a plane (an R^2 state in one declared length unit,
 the position of an SE(2) pose) its x-y path with start and target marked; an SE(3) pose its
-position against time. Bounds are dashed lines, prescribed final values stars, a free final
-time a dotted vertical line.
+position against time. Bounds are dashed lines (off scale, and said in the legend, when far
+from the values), prescribed final values stars, a free final time a dotted vertical line.
 """
 
 from __future__ import annotations
@@ -18,12 +19,11 @@ from typing import Any
 
 import numpy as np
 
+from ..model.units import TANGENTS
 from .names import Names, Quantity, called, manifold, with_unit
 
 MISS = 1e-6  # rad: a final attitude or direction farther than this from its target is named
-TANGENT_DEFAULTS = {"SO(3)": ["about x", "about y", "about z"],
-                    "SE(3)": ["about x", "about y", "about z", "x", "y", "z"],
-                    "SE(2)": ["heading", "x", "y"]}
+FAR = 1.0  # a bound farther from the values than FAR times their range is drawn off scale
 
 
 @dataclass
@@ -36,6 +36,7 @@ class Curve:
     label: str | None = None
     gid: str | None = None
     style: dict[str, Any] = field(default_factory=dict)
+    scale: bool = True  # whether the axes' limits fit it (False: a bound drawn off scale)
 
 
 @dataclass
@@ -83,23 +84,33 @@ def control_curve(sol: Any, per_piece: int = 12) -> tuple[np.ndarray, np.ndarray
 # ------------------------------------------------------------------ building blocks
 
 
-def _bounds(t: np.ndarray, idx: list[int], bounds: dict[int, tuple[Any, Any]],
+def _bounds(t: np.ndarray, y: np.ndarray, idx: list[int], bounds: dict[int, tuple[Any, Any]],
             colors: list[str]) -> list[Curve]:
-    """Dashed lines at the bounds of the components ``idx``: once in grey when they all
-    share them, else in each component's colour; one legend entry."""
+    """Dashed lines at the bounds of the components ``idx`` (values ``y``): once in grey when
+    they all share them, else in each component's colour; one legend entry. A bound farther
+    from the values than ``FAR`` times their range is drawn off scale (the y axis fits the
+    values, so that torques far inside their bounds stay readable) and named in the legend."""
     mine = [(bounds[i], c) for i, c in zip(idx, colors) if i in bounds]
     if not mine:
         return []
     if len(mine) == len(idx) and len({b for b, _ in mine}) == 1:
         mine = [(mine[0][0], "0.35")]
     span = np.array([np.nanmin(t), np.nanmax(t)])
+    values = y[:, idx]
+    low, high = np.nanmin(values, initial=np.inf), np.nanmax(values, initial=-np.inf)
+    reach = FAR * (high - low)
     out: list[Curve] = []
+    off: list[float] = []
     for (lo, hi), color in mine:
         for v in (lo, hi):
             if v is not None:
-                out.append(Curve(span, np.array([v, v]), label=None if out else "bounds",
-                                 gid="bound", style={"color": color, "linestyle": "--",
-                                                     "linewidth": 1.0}))
+                near = low - reach <= v <= high + reach
+                off += [] if near else [v]
+                out.append(Curve(span, np.array([v, v]), gid="bound", scale=near, style={
+                    "color": color, "linestyle": "--", "linewidth": 1.0}))
+    if out:
+        shown = ", ".join(f"{v:g}" for v in sorted(set(off)))
+        out[0].label = f"bounds (off scale: {shown})" if off else "bounds"
     return out
 
 
@@ -116,34 +127,56 @@ def _targets(T: float, values: np.ndarray, prescribed: Any, colors: list[str]) -
     return out
 
 
+def colours(n: int) -> list[str]:
+    """n distinct line colours: matplotlib's ten (C0..C9), or twenty paired shades beyond."""
+    if n <= 10:
+        return [f"C{k}" for k in range(n)]
+    from matplotlib import colormaps
+    from matplotlib.colors import to_hex
+
+    cmap = colormaps["tab20"]
+    order = [*range(0, 20, 2), *range(1, 20, 2)]  # the dark shades first, then the light
+    return [to_hex(cmap(order[k % 20])) for k in range(n)]
+
+
+def titles(q: Quantity, keys: list[tuple[str, str, list[int]]]) -> list[str]:
+    """One title per panel of ``q``: the meaning of the symbol its components share (a
+    thrust f, torques tau) or of the quantity, then the group; panels that would read the
+    same name their unit."""
+    out = []
+    for group, _, idx in keys:
+        meaning = q.meanings.get(q.symbol(idx), q.meaning)
+        out.append(f"{meaning}: {group}" if group else meaning)
+    return [f"{t}: components in {u or 'no declared unit'}" if out.count(t) > 1 else t
+            for t, (_, u, _) in zip(out, keys)]
+
+
 def against_time(q: Quantity, t: np.ndarray, y: np.ndarray, names: Names, gid: str,
                  bounds: dict[int, tuple[Any, Any]] | None = None, T: float | None = None,
                  prescribed: Any = False, samples: tuple[np.ndarray, np.ndarray] | None = None
                  ) -> list[Panel]:
-    """One panel per unit of ``q``: its components against time, their bounds, prescribed
-    final values (``prescribed``, at time T) and sample points (``samples``: t, values).
-    A lone component named as the quantity gets no legend entry (the title says it)."""
+    """One panel per (group, unit) of ``q``: its components against time, their bounds,
+    prescribed final values (``prescribed``, at time T) and sample points (``samples``: t,
+    values). A lone component named as its panel gets no legend entry (the title says it)."""
     y = np.asarray(y, dtype=float).reshape(len(t), -1)
-    groups = q.by_unit()
+    keys = q.panels()
     out = []
-    for unit, idx in groups:
-        colors = [f"C{k % 10}" for k in range(len(idx))]
-        lone = len(idx) == 1 and q.components[idx[0]] == q.meaning
+    for (group, unit, idx), title in zip(keys, titles(q, keys)):
+        colors = colours(len(idx))
+        lone = len(idx) == 1 and q.components[idx[0]] in (q.meaning, title)
         curves = [Curve(t, y[:, i], label=None if lone else q.components[i], gid=f"{gid}[{i}]",
                         style={"color": c}) for i, c in zip(idx, colors)]
         if samples is not None:
             curves += [Curve(samples[0], samples[1][:, i], style={
                 "color": c, "marker": ".", "markersize": 3.5, "linestyle": "none"})
                 for i, c in zip(idx, colors)]
-        curves += _bounds(t, idx, bounds or {}, colors)
+        curves += _bounds(t, y, idx, bounds or {}, colors)
         if T is not None and prescribed is not False:
             flags = prescribed if isinstance(prescribed, list) else [True] * y.shape[1]
             curves += _targets(T, y[-1, idx], [flags[i] for i in idx], colors)
-        split = len(groups) > 1
-        title = f"{q.meaning}: components in {unit or 'no declared unit'}" if split else \
-            q.meaning
-        out.append(Panel("time", title, names.time_label, with_unit(q.name, unit), curves,
-                         f"{gid}:{unit}" if split else gid))
+        key = f"{group}:{unit}" if group else unit
+        out.append(Panel("time", title, names.time_label, with_unit(q.symbol(idx), unit),
+                         curves, f"{gid}:{key}" if len(keys) > 1 else gid))
     return out
 
 
@@ -195,18 +228,18 @@ def state_panels(sol: Any, names: Names, name: str) -> list[Panel]:
     prescribed = names.final(name)
     whole = prescribed is True or (isinstance(prescribed, list) and all(prescribed))
     if kind in ("SO(3)", "SE(3)"):
-        q = names.quantity("states", name, 3 if kind == "SO(3)" else 6, TANGENT_DEFAULTS[kind])
+        q = names.quantity("states", name, 3 if kind == "SO(3)" else 6, *TANGENTS[kind][:2])
         R = v[:, :3, :3]
         out = [error_panel(name, q.meaning, "attitude", t, rotation_angle(R, R[-1]), names,
                            whole, pose=kind == "SE(3)")]
         if kind == "SE(3)":
             pos = Quantity("position", f"{called(q.meaning, name)}: position", q.components[3:],
-                           q.units[3:])
+                           q.units[3:], q.groups[3:])
             out += against_time(pos, t, v[:, :3, 3], names, f"position:{name}", T=T,
                                 prescribed=whole)
         return out
     if kind == "SE(2)":
-        q = names.quantity("states", name, 3, TANGENT_DEFAULTS[kind])
+        q = names.quantity("states", name, 3, *TANGENTS[kind][:2])
         heading = np.unwrap(np.arctan2(v[:, 1, 0], v[:, 0, 0]))
         pos = Quantity("position", f"{called(q.meaning, name)}: path in the plane",
                        q.components[1:], q.units[1:])
@@ -269,7 +302,7 @@ def multiplier_panels(sol: Any, names: Names) -> list[Panel]:
         n = len(idx)
         q = names.quantity("multipliers", cname, n,
                            [f"λ {cname}" if n == 1 else f"λ {cname}[{i + 1}]" for i in range(n)])
-        q = Quantity("λ", f"multipliers of {q.meaning}", q.components, q.units)
+        q = Quantity("λ", f"multipliers of {q.meaning}", q.components, q.units, q.groups)
         out += against_time(q, t, phi[:, idx], names, f"multipliers:{cname}")
     return out
 
