@@ -17,8 +17,10 @@ values) except CasADi's own output:
   ``params.txt`` the exported instance; ``Makefile`` and ``README.md``.
 
 Every symbol, macro and file name of an export starts with its ``prefix`` (``ocg_``/``OCG_``
-by default), so that exports of different problems link into one program; no state is shared
-between two solves but the one-at-a-time memory of CasADi's generated solver (README.md).
+by default), so that exports of different problems link into one program. A solve keeps its
+state in its result and on the stack; what stays global is read-only (the tables) or per
+export and one solve at a time: the memory CasADi's generated solver checks out, and the
+hooks' pointer to the running solve's record (``hooks.c.in`` says why).
 
 One export serves every instance of the model: boundary values, physical parameters and T
 are inputs. Multi-start, continuation and the model's own guess hooks stay in Python: the
