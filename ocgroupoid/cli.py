@@ -416,12 +416,16 @@ def export_c_command(
     cflags: str = typer.Option("", "--cflags", help="extra CFLAGS for --build"),
     force: bool = typer.Option(False, "--force", help="write into --out even if it holds "
                                "files export-c did not write (they are overwritten)"),
+    prefix: Optional[str] = typer.Option(None, "--prefix", help="start of every C name and "
+                                         "file of the export (e.g. so3_; default ocg_): "
+                                         "exports with different prefixes link into one "
+                                         "program"),
 ) -> None:
     """Export the compiled problem as a C project (IPOPT via CasADi codegen): `make -C OUT`
     builds OUT/solve, which prints the solution JSON; OUT/README.md tells the rest. Needs a
     C compiler and make to build. OUT must be new, empty or an earlier export (--force)."""
     from . import files
-    from .export import claim_folder, export_c, make, positive_parameters
+    from .export import DEFAULT_PREFIX, claim_folder, export_c, make, positive_parameters
 
     try:
         cfg = files.load(file, set_)
@@ -433,7 +437,8 @@ def export_c_command(
             done = export_c(files.build(cfg), out_dir, N, d.retraction, d.rule,
                             f.solver.ipopt, scheme=d.scheme, steps=d.steps, force=force,
                             backend=f.solver.backend, max_seconds=f.solver.max_seconds,
-                            positive=positive_parameters(cfg.spec.parameters))
+                            positive=positive_parameters(cfg.spec.parameters),
+                            prefix=prefix or DEFAULT_PREFIX)
         if build:
             with _status("building with make...", False):
                 binary = make(done.folder, cflags)

@@ -1,34 +1,31 @@
 """Exported C code: one compiled problem as a small C project that builds and runs alone.
 
-``export_c(problem, folder)`` writes, next to a verbatim C library (``c_templates/``):
+``export_c(problem, folder)`` writes a C project in which every file is rendered from a
+template of ``c_templates/`` (``@KEY@`` placeholders, :func:`_fill`; Python computes only the
+values) except CasADi's own output:
 
-- ``ocg_generated.c/.h``: CasADi-generated C of four Functions the Python path evaluates
-  too — nothing here computes anything of its own:
+- ``{prefix}generated.c/.h``, ``{prefix}generated_warm.c/.h``: the CasADi-generated
+  Functions of :mod:`~ocgroupoid.export.functions` (the solvers, the guess, the packing of a
+  parameter file, the read-out, the verdict's checks), after ``prelude.c.in``;
+- the library, one job a file: ``{prefix}solver.c/.h`` the public API, ``{prefix}json.c``
+  the JSON writer, ``{prefix}functions.c/.h`` the calls of the generated functions,
+  ``{prefix}hooks.c/.h`` with ``{prefix}ipopt_hooks.h`` and ``{prefix}fatrop_hooks.h`` what
+  the backend reports of a solve, ``{prefix}result.h`` what a result holds,
+  ``{prefix}model.c/.h`` the dimensions and the tables (the ranges of the keys from
+  :mod:`~ocgroupoid.model.ranges`, which the problem files are checked against too);
+- the driver: ``main.c`` and ``{prefix}params.c/.h`` (the parameter-file reader);
+  ``params.txt`` the exported instance; ``Makefile`` and ``README.md``.
 
-  ``ocg_gen_nlpsol(x0, p) -> (x, f, g, lam_g, lam_x)``  the Transcription's solver (IPOPT, or
-  fatrop on the stage form: ``solver.backend``) with the bounds computed from p (its
-  stage-wise derivatives come from nlpsol's cache), and ``ocg_gen_nlpsol_warm`` the same from
-  a primal-dual point (IPOPT's warm start; fatrop's primal);
-  ``ocg_gen_guess(p) -> x0``  the first geodesic guess (:attr:`Transcription.guess_function`)
-  through :attr:`Transcription.point_function`;
-  ``ocg_gen_pack(values) -> (p, bad)``  :attr:`ParameterValues.pack_function`, the packing of
-  the numbers of a parameter file into p;
-  ``ocg_gen_post(x, p, lam_g) -> (...)``  :attr:`Transcription.readout_function`, the read-out
-  a Solution is made of;
-  ``ocg_gen_verify(x, p, lam_g) -> (ratios, figures)``  the verdict's checks
-  (:mod:`~ocgroupoid.solve.verify_graph`: residuals, the plan replayed through the continuous
-  problem — landing, bounds along it), so that the C solver's ``success`` means what
-  Python's means, IPOPT's status kept apart.
-
-- ``ocg_model.h/.c``: the dimensions and the tables the JSON writer and the parameter-file
-  reader need (the ranges of the keys generated from :mod:`~ocgroupoid.model.ranges`, which
-  the problem files are checked against too); ``params.txt``: the exported instance;
-  ``Makefile`` and ``README.md``.
+Every symbol, macro and file name of an export starts with its ``prefix`` (``ocg_``/``OCG_``
+by default), so that exports of different problems link into one program. A solve keeps its
+state in its result and on the stack; what stays global is read-only (the tables) or per
+export and one solve at a time: the memory CasADi's generated solver checks out, and the
+hooks' pointer to the running solve's record (``hooks.c.in`` says why).
 
 One export serves every instance of the model: boundary values, physical parameters and T
 are inputs. Multi-start, continuation and the model's own guess hooks stay in Python: the
 C solver starts from the geodesic guess, from a point the caller gives, or from an earlier
-result's primal-dual point (``ocg_solve_warm``).
+result's primal-dual point (``{prefix}solve_warm``).
 """
 
 from __future__ import annotations
@@ -38,7 +35,6 @@ import json
 import re
 import shutil
 import subprocess
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Collection, Sequence
@@ -48,6 +44,7 @@ import numpy as np
 
 from .._version import __version__
 from ..errors import ConfigError, ExportError
+from ..model.problem import Problem
 from ..model.ranges import (
     FILE_BYTES,
     POSITIVE,
@@ -57,39 +54,28 @@ from ..model.ranges import (
     block_range,
     positive_parameters,  # noqa: F401  (re-exported: the export API names it)
 )
-from ..model.problem import Problem
 from ..nlp.parameters import ParameterValues
 from ..nlp.schemes import DEFAULT_RULE, DEFAULT_SCHEME
-from ..nlp.transcription import C_READOUT_OUTPUTS, DEFAULT_BACKEND, MAX_SECONDS, Transcription
-from ..solve.diagnostics import replay_of
+from ..nlp.transcription import (
+    C_READOUT_OUTPUTS,
+    DEFAULT_BACKEND,
+    MAX_SECONDS,
+    Transcription,
+)
 from ..solve.outputs import check_folder, write_atomic
 from ..solve.solver import Solver
-from ..solve.verdict import REPLAY_TOLERANCE, check_tolerance
-from ..solve.verify_graph import CHECKS, FIGURES, verify_function
+from ..solve.verify_graph import CHECKS, FIGURES
+from .functions import CHECK_FAILURES, generate
 
 TEMPLATES = Path(__file__).resolve().parent / "c_templates"
-VERBATIM = ("ocg_solver.h", "ocg_solver.c", "ocg_ipopt_hooks.h", "ocg_fatrop_hooks.h", "main.c",
-            "ocg_params.h", "ocg_params.c")
-GENERATED = "ocg_generated"
-# Prepended to the CasADi-generated file: CasADi's uniform calling convention leaves
-# arguments (mem, iw, w) unused, and the two IPOPT calls are routed through ocg_solver.c.
-GENERATED_PRELUDE = """\
-/* ocgroupoid: CasADi passes every generated function the same arguments (mem, iw, w), and
- * many functions ignore some of them; that one warning is off in this file only. */
-#if defined(__GNUC__)
-#pragma GCC diagnostic ignored "-Wunused-parameter"
-#endif
-/* The solver's return status and iteration count, which the generated solver keeps to
- * itself, are recorded by the wrappers of ocg_ipopt_hooks.h (and ocg_fatrop_hooks.h). */
-#define OCG_ROUTE_IPOPT
-#include "ocg_ipopt_hooks.h"
-"""
-FATROP_PRELUDE = """\
-#define OCG_ROUTE_FATROP
-#include "ocg_fatrop_hooks.h"
-"""
-#: outputs of the generated solvers (ocg_gen_nlpsol, ocg_gen_nlpsol_warm)
-SOLVE_OUTPUTS = ("x", "f", "g", "lam_g", "lam_x")
+#: the exported files rendered from c_templates/NAME.in, named with the prefix
+#: (``{prefix}solver.c`` from ``solver.c.in``; main.c keeps its name)
+PREFIXED = ("solver.h", "solver.c", "result.h", "json.c", "functions.h", "functions.c",
+            "hooks.h", "hooks.c", "ipopt_hooks.h", "fatrop_hooks.h", "model.h", "model.c",
+            "params.h", "params.c")
+#: the prefix of every symbol, macro (upper case) and file of an export unless told
+DEFAULT_PREFIX = "ocg_"
+_PREFIX = re.compile(r"[a-z][a-z0-9_]*_")
 #: the libraries each backend links with (all in the casadi wheel)
 BACKEND_LIBS = {"ipopt": "-lipopt", "fatrop": "-lipopt -lfatrop -lblasfeo"}
 EXPORT_IPOPT = {"print_level": 0, "sb": "yes"}  # stdout carries the JSON, nothing else
@@ -115,75 +101,6 @@ def write_params(path: str | Path, tr: Transcription, p: np.ndarray, header: str
     path = Path(path)
     write_atomic(path, params_text(tr.values, tr.values.values_of(p), header))
     return path
-
-
-# ----------------------------------------------------------------- the Functions
-
-
-def guess_function(tr: Transcription) -> ca.Function:
-    """``ocg_gen_guess(p) -> x0``: the point of the first geodesic guess."""
-    p = ca.MX.sym("p", tr.np)
-    first = tr.guess_function(p)
-    first = first[0] if isinstance(first, (list, tuple)) else first
-    return ca.Function("ocg_gen_guess", [p], [tr.point_function(first, p)], ["p"], ["x0"])
-
-
-def post_function(tr: Transcription) -> ca.Function:
-    """``ocg_gen_post(x, p, lam_g)``: the read-out outputs exported C reads (enum ocg_output)."""
-    x, p, lam = ca.MX.sym("x", tr.nx), ca.MX.sym("p", tr.np), ca.MX.sym("lam_g", tr.ng)
-    outs = tr.readout_function(x, p, lam)
-    return ca.Function("ocg_gen_post", [x, p, lam], list(outs)[:len(C_READOUT_OUTPUTS)],
-                       ["x", "p", "lam_g"], list(C_READOUT_OUTPUTS))
-
-
-#: RK4 substeps per piece of the exported replay (its own error is checked against half as
-#: many: a replay that has not converged fails the verdict)
-EXPORT_SUBSTEPS = 32
-
-
-def verify_export(tr: Transcription, ipopt: dict[str, Any] | None) -> ca.Function:
-    """``ocg_gen_verify(x, p, lam_g) -> (ratios, figures)``."""
-    fn = verify_function(tr, replay_of(tr), EXPORT_SUBSTEPS, check_tolerance(ipopt),
-                         REPLAY_TOLERANCE)
-    x, p, lam = ca.MX.sym("x", tr.nx), ca.MX.sym("p", tr.np), ca.MX.sym("lam_g", tr.ng)
-    return ca.Function("ocg_gen_verify", [x, p, lam], fn(x, p, lam), ["x", "p", "lam_g"],
-                       ["ratios", "figures"])
-
-
-#: what a failed check of the exported verdict says (the order of verify_graph.CHECKS)
-CHECK_FAILURES = {
-    "residual": "a residual or a bound at its points exceeds the check tolerance",
-    "landing": "the plan does not land: replayed through the continuous problem it misses "
-               "a final value by more than the landing tolerance; increase N",
-    "bounds": "a bound is violated between the points where it is imposed (along the "
-              "replayed plan); increase N or discretization.bound_points",
-    "constraints": "the constraints hold only where the scheme imposes them (along the "
-                   "replayed path they miss); increase N",
-    "integration": "the replay did not converge (or nothing can replay this problem): "
-                   "not verified",
-}
-
-
-def pack_function(tr: Transcription) -> ca.Function:
-    """``ocg_gen_pack(values) -> (p, bad)``."""
-    v = ca.SX.sym("values", tr.values.size)
-    p, bad = tr.values.pack_function(v)
-    return ca.Function("ocg_gen_pack", [v], [p, bad], ["values"], ["p", "bad"])
-
-
-def solver_function(tr: Transcription, warm: bool = False) -> ca.Function:
-    """``ocg_gen_nlpsol(x0, p) -> (x, f, g, lam_g, lam_x)``: the Transcription's solver
-    (:meth:`Transcription.solve_graph`) with the bounds of
-    :attr:`Transcription.bounds_function`, computed from p (a bound given by a parameter is a
-    runtime input of the exported solver); with ``warm``, ``ocg_gen_nlpsol_warm(x0, p, lam_g0,
-    lam_x0)``, its primal-dual warm start (fatrop: the primal point)."""
-    ins = [ca.MX.sym("x0", tr.nx), ca.MX.sym("p", tr.np)]
-    if warm:
-        ins += [ca.MX.sym("lam_g0", tr.ng), ca.MX.sym("lam_x0", tr.nx)]
-    r = tr.solve_graph(*ins)
-    return ca.Function("ocg_gen_nlpsol_warm" if warm else "ocg_gen_nlpsol", ins,
-                       [r[k] for k in SOLVE_OUTPUTS], [v.name() for v in ins],
-                       list(SOLVE_OUTPUTS))
 
 
 # ------------------------------------------------------------------ the C project
@@ -298,10 +215,11 @@ def static_labels(pb: Problem) -> dict[str, Any]:
     return labels
 
 
-def model_sources(tr: Transcription, default_p: np.ndarray, guess: str,
-                  positive: Collection[str] = ()) -> tuple[str, str]:
-    """ocg_model.h and ocg_model.c: dimensions, parameter-file keys (with the physical
-    parameters in ``positive`` flagged: their numbers must be > 0), JSON field tables."""
+def model_values(tr: Transcription, default_p: np.ndarray, guess: str,
+                 positive: Collection[str] = ()) -> dict[str, Any]:
+    """What model.h.in and model.c.in are filled with: dimensions, parameter-file keys (with
+    the physical parameters in ``positive`` flagged: their numbers must be > 0), JSON field
+    tables, the verdict's names; C literals and initializers."""
     pb, G, values = tr.problem, tr.problem.groupoid, tr.values
     state_fields, k = [], 0
     for f in G.factors:  # a shown state is a vector (rows 0) or a matrix, row-major
@@ -327,75 +245,48 @@ def model_sources(tr: Transcription, default_p: np.ndarray, guess: str,
         f"{int(on)}}}" for b, on in zip(values.blocks, flagged))
     ranges = ",\n".join(_c_range(block_range(b.key, b.kind, on))
                          for b, on in zip(values.blocks, flagged))
-    defines = {
-        "OCG_PROBLEM": _c_string(pb.name), "OCG_N": tr.N, "OCG_ORDER": pb.order,
-        "OCG_NX": tr.nx, "OCG_NP": tr.np, "OCG_NG": tr.ng, "OCG_NV": values.size,
-        "OCG_P_T": tr.layout.p_slices["T"].start, "OCG_N_BLOCKS": len(values.blocks),
-        "OCG_N_STATE_FIELDS": len(state_fields), "OCG_N_VELOCITY_FIELDS": len(velocity_fields),
-        "OCG_N_PARAMETER_FIELDS": len(param_fields), "OCG_NU": len(controls),
-        "OCG_N_MULTIPLIER_NAMES": len(multipliers), "OCG_N_POST": len(C_READOUT_OUTPUTS),
-        "OCG_SCHEME": _c_string(tr.disc.scheme),
-        "OCG_BACKEND_FATROP": int(tr.fatrop is not None), "OCG_BACKEND": _c_string(tr.backend),
-        "OCG_MAX_ITER": tr.fatrop.max_iter if tr.fatrop is not None else 0,
-        "OCG_RETRACTION": _c_string(tr.scheme.retraction), "OCG_RULE": _c_string(tr.disc.rule),
-        "OCG_GUESS_LABEL": _c_string(guess),
-        "OCG_MANIFOLDS_JSON": _c_string(json.dumps({f.state: f.manifold for f in G.factors})),
-        "OCG_LABELS_JSON": _c_string(json.dumps(static_labels(pb))),
-        "OCG_N_CHECKS": len(CHECKS), "OCG_N_FIGURES": len(FIGURES),
-        "OCG_CHECK_NAMES": _names(CHECKS), "OCG_FIGURE_NAMES": _names(FIGURES),
-        "OCG_CHECK_FAILURES": _names([CHECK_FAILURES[c] for c in CHECKS]),
-        "OCG_PARAMS_MAX_BYTES": FILE_BYTES,
-        "OCG_RANGE_SIGNED": SIGNED, "OCG_RANGE_POSITIVE": POSITIVE, "OCG_RANGE_TIME": TIME,
+    return {
+        "COMMENT_NAME": plain_name(pb.name), "PROBLEM": _c_string(pb.name), "N": tr.N,
+        "ORDER": pb.order, "NX": tr.nx, "NP": tr.np, "NG": tr.ng, "NV": values.size,
+        "P_T": tr.layout.p_slices["T"].start, "N_BLOCKS": len(values.blocks),
+        "N_STATE_FIELDS": len(state_fields), "N_VELOCITY_FIELDS": len(velocity_fields),
+        "N_PARAMETER_FIELDS": len(param_fields), "NU": len(controls),
+        "N_MULTIPLIER_NAMES": len(multipliers), "N_POST": len(C_READOUT_OUTPUTS),
+        "SCHEME": _c_string(tr.disc.scheme), "BACKEND_FATROP": int(tr.fatrop is not None),
+        "BACKEND": _c_string(tr.backend),
+        "MAX_ITER": tr.fatrop.max_iter if tr.fatrop is not None else 0,
+        "RETRACTION": _c_string(tr.scheme.retraction), "RULE": _c_string(tr.disc.rule),
+        "GUESS_LABEL": _c_string(guess),
+        "MANIFOLDS_JSON": _c_string(json.dumps({f.state: f.manifold for f in G.factors})),
+        "LABELS_JSON": _c_string(json.dumps(static_labels(pb))),
+        "N_CHECKS": len(CHECKS), "N_FIGURES": len(FIGURES), "PARAMS_MAX_BYTES": FILE_BYTES,
+        "RANGE_SIGNED": SIGNED, "RANGE_POSITIVE": POSITIVE, "RANGE_TIME": TIME,
+        "MAX_SECONDS": _c_double(tr.max_seconds),
+        "BLOCKS": f"{{\n{blocks}\n}}", "RANGES": f"{{\n{ranges}\n}}",
+        "DEFAULT_VALUES": _c_doubles(values.values_of(default_p)),
+        "STATE_FIELDS": _fields(state_fields), "VELOCITY_FIELDS": _fields(velocity_fields),
+        "PARAMETER_FIELDS": _fields(param_fields), "CONTROL_NAMES": _names(controls),
+        "MULTIPLIER_NAMES": _names(multipliers), "CHECK_NAMES": _names(CHECKS),
+        "FIGURE_NAMES": _names(FIGURES),
+        "CHECK_FAILURES": _names([CHECK_FAILURES[c] for c in CHECKS]),
     }
-    header = "\n".join([
-        f"/* Generated by ocgroupoid {__version__} for {plain_name(pb.name)}: the exported "
-        "instance's "
-        "dimensions and tables. */",
-        "#ifndef OCG_MODEL_H", "#define OCG_MODEL_H", "",
-        *[f"#define {k} {v}" for k, v in defines.items()], "",
-        "/* The wall time of one run of ./solve (solver.max_seconds): past it, it stops with a "
-        "message. */",
-        "#ifndef OCG_MAX_SECONDS",
-        f"#define OCG_MAX_SECONDS {_c_double(tr.max_seconds)}",
-        "#endif", "",
-        "/* A key of a parameter file: numbers values[offset .. offset+size); positive: each "
-        "must be > 0. */",
-        "typedef struct { const char *key; int offset; int size; const char *meaning; "
-        "int positive; } ocg_block;",
-        "/* The range of a key's numbers (ocgroupoid.model.ranges): kind OCG_RANGE_*, each in "
-        "[lo, hi], and at most ratio apart (0: no limit). */",
-        "typedef struct { int kind; double lo; double hi; double ratio; } ocg_range;",
-        "/* A named slice of an output row: offset, and rows x cols (rows 0: a vector). */",
-        "typedef struct { const char *name; int offset; int rows; int cols; } ocg_field;", "",
-        "extern const ocg_block ocg_blocks[];",
-        "extern const ocg_range ocg_ranges[];",
-        "extern const double ocg_default_values[];",
-        "extern const ocg_field ocg_state_fields[];",
-        "extern const ocg_field ocg_velocity_fields[];",
-        "extern const ocg_field ocg_parameter_fields[];",
-        "extern const char *const ocg_control_names[];",
-        "extern const char *const ocg_multiplier_names[];", "",
-        "#endif", ""])
-    source = "\n".join([
-        f"/* Generated by ocgroupoid {__version__} for {plain_name(pb.name)}. */",
-        '#include <stddef.h>', '#include "ocg_model.h"', "",
-        f"const ocg_block ocg_blocks[] = {{\n{blocks}\n}};",
-        f"const ocg_range ocg_ranges[] = {{\n{ranges}\n}};",
-        f"const double ocg_default_values[] = {_c_doubles(values.values_of(default_p))};",
-        f"const ocg_field ocg_state_fields[] = {_fields(state_fields)};",
-        f"const ocg_field ocg_velocity_fields[] = {_fields(velocity_fields)};",
-        f"const ocg_field ocg_parameter_fields[] = {_fields(param_fields)};",
-        f"const char *const ocg_control_names[] = {_names(controls)};",
-        f"const char *const ocg_multiplier_names[] = {_names(multipliers)};", ""])
-    return header, source
 
 
 def _fill(template: str, values: dict[str, Any]) -> str:
     """``@KEY@`` replaced by its value, in one pass (a value holding ``@X@`` stays as is)."""
-    left = set(re.findall(r"@([A-Z_]+)@", template)) - set(values)
+    left = set(_PLACEHOLDER.findall(template)) - set(values)
     if left:
         raise ExportError(f"template placeholders without a value: {sorted(left)}")
-    return re.sub(r"@([A-Z_]+)@", lambda m: str(values[m.group(1)]), template)
+    return _PLACEHOLDER.sub(lambda m: str(values[m.group(1)]), template)
+
+
+#: ``@KEY@`` in a template; ``@prefix@`` and ``@PREFIX@`` are the export's prefix
+_PLACEHOLDER = re.compile(r"@([A-Za-z_]+)@")
+
+
+def _render(name: str, values: dict[str, Any]) -> str:
+    """The template ``c_templates/name`` filled with ``values``."""
+    return _fill((TEMPLATES / name).read_text(), values)
 
 
 def _blocks_table(values: ParameterValues) -> str:
@@ -404,38 +295,6 @@ def _blocks_table(values: ParameterValues) -> str:
         rows.append(f"| `{b.key}` | {b.size} | {_one_line(b.meaning)}"
                     + (f" ({b.note})" if b.note else "") + " |")
     return "\n".join(rows)
-
-
-def _generate(tr: Transcription, ipopt: dict[str, Any] | None = None) -> dict[str, str]:
-    """The CasADi-generated ``ocg_generated.c`` (with :data:`GENERATED_PRELUDE`) and ``.h``,
-    and ``ocg_generated_warm.c/.h`` (the warm-start solver: a second IPOPT instance, whose
-    generated callbacks would clash with the first's in one file), generated in a temporary
-    folder."""
-    prelude = GENERATED_PRELUDE + (FATROP_PRELUDE if tr.fatrop is not None else "")
-    out = {}
-    for name, fns in ((GENERATED, (solver_function(tr), guess_function(tr), pack_function(tr),
-                                   post_function(tr), verify_export(tr, ipopt))),
-                      (f"{GENERATED}_warm", (solver_function(tr, warm=True),))):
-        cg = ca.CodeGenerator(name, {"with_header": True})
-        for fn in fns:
-            cg.add(fn)
-        with tempfile.TemporaryDirectory(prefix="ocgroupoid-export-") as tmp:
-            cg.generate(tmp + "/")
-            c, h = (Path(tmp) / f"{name}.{ext}" for ext in ("c", "h"))
-            out[c.name], out[h.name] = prelude + "\n" + _empty_copies(c.read_text()), \
-                h.read_text()
-    return out
-
-
-#: CasADi 3.8 writes the copy of an empty matrix (a problem without parameters, broadcast
-#: over the stages) as ``casadi_copy(0, 0, 0+ i*0)``: a null destination given as an integer,
-#: which C compilers warn about; the copy moves nothing
-_EMPTY_COPY = re.compile(r"casadi_copy\(0, 0, 0\+ i\*0\);")
-
-
-def _empty_copies(source: str) -> str:
-    """Generated C without the empty copies of :data:`_EMPTY_COPY`."""
-    return _EMPTY_COPY.sub("/* an empty copy */", source)
 
 
 def _digest(data: str | bytes) -> str:
@@ -480,6 +339,16 @@ def claim_folder(folder: str | Path, force: bool = False, what: str = "export fo
     return folder
 
 
+def check_prefix(prefix: str) -> str:
+    """``prefix`` if it can start C names: lower-case letters, digits and ``_``, a letter
+    first and ``_`` last (``so3_``); else a ConfigError with the fix."""
+    if not isinstance(prefix, str) or not _PREFIX.fullmatch(prefix):
+        raise ConfigError(f"prefix={prefix!r}: a prefix of C names is lower-case letters, "
+                          "digits and '_', starting with a letter and ending with '_' "
+                          "(e.g. 'so3_')")
+    return prefix
+
+
 def _write_all(folder: Path, files: dict[str, str | bytes]) -> None:
     """Write every file atomically; the manifest first accepts the old and the new contents
     (an interrupted export can be redone), then only the new ones."""
@@ -504,7 +373,8 @@ def export_c(problem: Problem | Solver, folder: str | Path, N: int = 64,
              ipopt_lib: str | Path | None = None, ipopt_include: str | Path | None = None,
              cflags: str = "", scheme: str = DEFAULT_SCHEME, steps: str = "uniform",
              force: bool = False, positive: Collection[str] = (),
-             backend: str = DEFAULT_BACKEND, max_seconds: float = MAX_SECONDS) -> Export:
+             backend: str = DEFAULT_BACKEND, max_seconds: float = MAX_SECONDS,
+             prefix: str = DEFAULT_PREFIX) -> Export:
     """Write ``problem`` compiled on N intervals as a C project in ``folder``.
 
     ``problem`` may also be a compiled :class:`Solver` (its N, scheme, retraction, rule and
@@ -522,7 +392,9 @@ def export_c(problem: Problem | Solver, folder: str | Path, N: int = 64,
     driver refuses others with the message the problem files give;
     :func:`positive_parameters` reads them off a model's schema). ``max_seconds``: the wall
     time of one run of ``./solve`` (IPOPT's ``max_wall_time``; the driver stops anything that
-    runs longer, e.g. fatrop).
+    runs longer, e.g. fatrop). ``prefix`` (lower case, ending in ``_``) starts every symbol,
+    macro (in upper case) and C file name of the export: exports with different prefixes
+    link into one program.
     """
     if steps == "adaptive" or (isinstance(problem, Solver) and problem.disc.steps == "adaptive"):
         raise ConfigError("adaptive steps come from a second, phased solve placed on the "
@@ -531,6 +403,7 @@ def export_c(problem: Problem | Solver, folder: str | Path, N: int = 64,
     if not isinstance(problem, (Solver, Problem)):
         raise ConfigError(f"export_c takes a Problem or a compiled Solver, got "
                           f"{type(problem).__name__}")
+    check_prefix(prefix)
     folder = claim_folder(folder, force)
     lib, include = _ipopt_paths(ipopt_lib, ipopt_include)
     if isinstance(problem, Solver):
@@ -540,21 +413,24 @@ def export_c(problem: Problem | Solver, folder: str | Path, N: int = 64,
                         steps, backend=backend, max_seconds=max_seconds)
     tr = solver.transcription
     p = tr.pack()
-    files: dict[str, str | bytes] = dict(_generate(tr, solver.ipopt))
+    names = {"prefix": prefix, "PREFIX": prefix.upper(), "VERSION": __version__}
+    files: dict[str, str | bytes] = dict(generate(tr, solver.ipopt, prefix,
+                                                  _render("prelude.c.in", names)))
     guess = tr.guess_labels[0]  # what the C solver starts from
-    files["ocg_model.h"], files["ocg_model.c"] = model_sources(tr, p, guess, positive)
-    for name in VERBATIM:
-        files[name] = (TEMPLATES / name).read_bytes()
+    model = {**names, **model_values(tr, p, guess, positive)}
+    for name in PREFIXED:
+        files[prefix + name] = _render(f"{name}.in", model)
+    files["main.c"] = _render("main.c.in", names)
     pb = tr.problem
-    info = {"PROBLEM": plain_name(pb.name), "N": tr.N, "RETRACTION": tr.disc.retraction,
-            "RULE": tr.disc.rule, "ORDER": pb.order, "NX": tr.nx, "NP": tr.np, "NG": tr.ng,
-            "NV": tr.values.size, "VERSION": __version__, "CASADI": ca.__version__,
-            "IPOPT_LIB": lib, "IPOPT_INCLUDE": include, "GUESS": _one_line(guess),
-            "BACKEND": tr.backend, "BACKEND_LIBS": BACKEND_LIBS[tr.backend],
-            "KEYS": _blocks_table(tr.values)}
-    files["Makefile"] = _fill((TEMPLATES / "Makefile.in").read_text(), {
+    info = {**names, "PROBLEM": plain_name(pb.name), "N": tr.N,
+            "RETRACTION": tr.disc.retraction, "RULE": tr.disc.rule, "ORDER": pb.order,
+            "NX": tr.nx, "NP": tr.np, "NG": tr.ng, "NV": tr.values.size,
+            "CASADI": ca.__version__, "IPOPT_LIB": lib, "IPOPT_INCLUDE": include,
+            "GUESS": _one_line(guess), "BACKEND": tr.backend,
+            "BACKEND_LIBS": BACKEND_LIBS[tr.backend], "KEYS": _blocks_table(tr.values)}
+    files["Makefile"] = _render("Makefile.in", {
         **info, "IPOPT_LIB": _make_value(lib), "IPOPT_INCLUDE": _make_value(include)})
-    files["README.md"] = _fill((TEMPLATES / "README.md.in").read_text(), info)
+    files["README.md"] = _render("README.md.in", info)
     files["params.txt"] = params_text(tr.values, tr.values.values_of(p), (
         f"{plain_name(pb.name)}: the exported instance (N={tr.N}, {tr.disc.retraction}). "
         "Edit values, drop keys to keep their defaults,\nthen run ./solve params.txt. "

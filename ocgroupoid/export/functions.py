@@ -1,0 +1,131 @@
+"""The Functions an export generates C of, and their C (CasADi's code generator).
+
+Each is a Function the Python path evaluates too (nothing here computes anything of its own),
+named after the export's prefix (``ocg_`` by default), so that two exports link into one
+program:
+
+``{prefix}gen_nlpsol(x0, p) -> (x, f, g, lam_g, lam_x)``  the Transcription's solver (IPOPT,
+or fatrop on the stage form: ``solver.backend``) with the bounds computed from p, and
+``{prefix}gen_nlpsol_warm`` the same from a primal-dual point (IPOPT's warm start; fatrop's
+primal); ``{prefix}gen_guess(p) -> x0`` the first geodesic guess; ``{prefix}gen_pack(values)
+-> (p, bad)`` the packing of a parameter file's numbers; ``{prefix}gen_post(x, p, lam_g)`` the
+read-out a Solution is made of; ``{prefix}gen_verify(x, p, lam_g) -> (ratios, figures)`` the
+verdict's checks (:mod:`~ocgroupoid.solve.verify_graph`).
+"""
+
+from __future__ import annotations
+
+import re
+import tempfile
+from pathlib import Path
+from typing import Any
+
+import casadi as ca
+
+from ..nlp.transcription import C_READOUT_OUTPUTS, Transcription
+from ..solve.diagnostics import replay_of
+from ..solve.verdict import REPLAY_TOLERANCE, check_tolerance
+from ..solve.verify_graph import verify_function
+
+#: outputs of the generated solvers ({prefix}gen_nlpsol, {prefix}gen_nlpsol_warm)
+SOLVE_OUTPUTS = ("x", "f", "g", "lam_g", "lam_x")
+#: RK4 substeps per piece of the exported replay (its own error is checked against half as
+#: many: a replay that has not converged fails the verdict)
+EXPORT_SUBSTEPS = 32
+
+
+def guess_function(tr: Transcription, prefix: str) -> ca.Function:
+    """``{prefix}gen_guess(p) -> x0``: the point of the first geodesic guess."""
+    p = ca.MX.sym("p", tr.np)
+    first = tr.guess_function(p)
+    first = first[0] if isinstance(first, (list, tuple)) else first
+    return ca.Function(f"{prefix}gen_guess", [p], [tr.point_function(first, p)], ["p"], ["x0"])
+
+
+def post_function(tr: Transcription, prefix: str) -> ca.Function:
+    """``{prefix}gen_post(x, p, lam_g)``: the read-out outputs exported C reads (enum
+    {prefix}output)."""
+    x, p, lam = ca.MX.sym("x", tr.nx), ca.MX.sym("p", tr.np), ca.MX.sym("lam_g", tr.ng)
+    outs = tr.readout_function(x, p, lam)
+    return ca.Function(f"{prefix}gen_post", [x, p, lam], list(outs)[:len(C_READOUT_OUTPUTS)],
+                       ["x", "p", "lam_g"], list(C_READOUT_OUTPUTS))
+
+
+def verify_export(tr: Transcription, ipopt: dict[str, Any] | None, prefix: str) -> ca.Function:
+    """``{prefix}gen_verify(x, p, lam_g) -> (ratios, figures)``."""
+    fn = verify_function(tr, replay_of(tr), EXPORT_SUBSTEPS, check_tolerance(ipopt),
+                         REPLAY_TOLERANCE)
+    x, p, lam = ca.MX.sym("x", tr.nx), ca.MX.sym("p", tr.np), ca.MX.sym("lam_g", tr.ng)
+    return ca.Function(f"{prefix}gen_verify", [x, p, lam], fn(x, p, lam), ["x", "p", "lam_g"],
+                       ["ratios", "figures"])
+
+
+#: what a failed check of the exported verdict says (the order of verify_graph.CHECKS)
+CHECK_FAILURES = {
+    "residual": "a residual or a bound at its points exceeds the check tolerance",
+    "landing": "the plan does not land: replayed through the continuous problem it misses "
+               "a final value by more than the landing tolerance; increase N",
+    "bounds": "a bound is violated between the points where it is imposed (along the "
+              "replayed plan); increase N or discretization.bound_points",
+    "constraints": "the constraints hold only where the scheme imposes them (along the "
+                   "replayed path they miss); increase N",
+    "integration": "the replay did not converge (or nothing can replay this problem): "
+                   "not verified",
+}
+
+
+def pack_function(tr: Transcription, prefix: str) -> ca.Function:
+    """``{prefix}gen_pack(values) -> (p, bad)``."""
+    v = ca.SX.sym("values", tr.values.size)
+    p, bad = tr.values.pack_function(v)
+    return ca.Function(f"{prefix}gen_pack", [v], [p, bad], ["values"], ["p", "bad"])
+
+
+def solver_function(tr: Transcription, prefix: str, warm: bool = False) -> ca.Function:
+    """``{prefix}gen_nlpsol(x0, p) -> (x, f, g, lam_g, lam_x)``: the Transcription's solver
+    (:meth:`Transcription.solve_graph`) with the bounds of
+    :attr:`Transcription.bounds_function`, computed from p (a bound given by a parameter is a
+    runtime input of the exported solver); with ``warm``, ``{prefix}gen_nlpsol_warm(x0, p, lam_g0,
+    lam_x0)``, its primal-dual warm start (fatrop: the primal point)."""
+    ins = [ca.MX.sym("x0", tr.nx), ca.MX.sym("p", tr.np)]
+    if warm:
+        ins += [ca.MX.sym("lam_g0", tr.ng), ca.MX.sym("lam_x0", tr.nx)]
+    r = tr.solve_graph(*ins)
+    return ca.Function(f"{prefix}gen_nlpsol_warm" if warm else f"{prefix}gen_nlpsol", ins,
+                       [r[k] for k in SOLVE_OUTPUTS], [v.name() for v in ins],
+                       list(SOLVE_OUTPUTS))
+
+
+def generate(tr: Transcription, ipopt: dict[str, Any] | None, prefix: str,
+             prelude: str) -> dict[str, str]:
+    """The CasADi-generated ``{prefix}generated.c/.h`` and ``{prefix}generated_warm.c/.h``
+    (the warm-start solver: a second IPOPT instance, whose generated callbacks would clash
+    with the first's in one file), each C file after ``prelude``; generated in a
+    temporary folder. The file name is CasADi's prefix of its internal symbols."""
+    out = {}
+    for name, fns in ((f"{prefix}generated", (solver_function(tr, prefix),
+                                               guess_function(tr, prefix),
+                                               pack_function(tr, prefix),
+                                               post_function(tr, prefix),
+                                               verify_export(tr, ipopt, prefix))),
+                      (f"{prefix}generated_warm", (solver_function(tr, prefix, warm=True),))):
+        cg = ca.CodeGenerator(name, {"with_header": True})
+        for fn in fns:
+            cg.add(fn)
+        with tempfile.TemporaryDirectory(prefix="ocgroupoid-export-") as tmp:
+            cg.generate(tmp + "/")
+            c, h = (Path(tmp) / f"{name}.{ext}" for ext in ("c", "h"))
+            out[c.name] = prelude + _empty_copies(c.read_text())
+            out[h.name] = h.read_text()
+    return out
+
+
+#: CasADi 3.8 writes the copy of an empty matrix (a problem without parameters, broadcast
+#: over the stages) as ``casadi_copy(0, 0, 0+ i*0)``: a null destination given as an integer,
+#: which C compilers warn about; the copy moves nothing
+_EMPTY_COPY = re.compile(r"casadi_copy\(0, 0, 0\+ i\*0\);")
+
+
+def _empty_copies(source: str) -> str:
+    """Generated C without the empty copies of :data:`_EMPTY_COPY`."""
+    return _EMPTY_COPY.sub("/* an empty copy */", source)
