@@ -48,6 +48,7 @@ import numpy as np
 
 from .._version import __version__
 from ..errors import ConfigError, ExportError
+from ..model.problem import Problem
 from ..model.ranges import (
     FILE_BYTES,
     POSITIVE,
@@ -57,7 +58,6 @@ from ..model.ranges import (
     block_range,
     positive_parameters,  # noqa: F401  (re-exported: the export API names it)
 )
-from ..model.problem import Problem
 from ..nlp.parameters import ParameterValues
 from ..nlp.schemes import DEFAULT_RULE, DEFAULT_SCHEME
 from ..nlp.transcription import C_READOUT_OUTPUTS, DEFAULT_BACKEND, MAX_SECONDS, Transcription

@@ -37,10 +37,10 @@ from ..errors import ConfigError
 from ..model.problem import Problem
 from ..models import MODELS
 from ..models.registry import ModelSpec
+from ..nlp.schemes import SCHEME_NAMES
 from . import bounds, limits
 from .custom import Definition, spec as custom_spec
 from .expressions import CONSTANTS, FUNCTIONS, compile_expression
-from ..nlp.schemes import SCHEME_NAMES
 from .messages import validate
 from .scale import check_scale
 from .schema import ProblemFile

@@ -18,8 +18,8 @@ there.
 
 from __future__ import annotations
 
-import sys
 import difflib
+import sys
 from typing import Any
 
 import casadi as ca

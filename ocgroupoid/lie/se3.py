@@ -13,8 +13,8 @@ their value nor their derivative is NaN.
 
 from __future__ import annotations
 
-import sys
 import difflib
+import sys
 from typing import Any
 
 import casadi as ca

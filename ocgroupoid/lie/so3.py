@@ -8,8 +8,8 @@ Taylor branch built from a guarded argument, so neither value nor derivative is 
 
 from __future__ import annotations
 
-import sys
 import difflib
+import sys
 from typing import Any, Sequence
 
 import casadi as ca

@@ -7,9 +7,9 @@ point (:attr:`~ocgroupoid.nlp.transcription.Transcription.point_function`).
 
 from __future__ import annotations
 
-import numpy as np
-
 from typing import Any
+
+import numpy as np
 
 from ..errors import ConfigError
 from ..model.problem import GuessContext

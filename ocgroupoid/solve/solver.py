@@ -18,8 +18,8 @@ import numpy as np
 
 from ..errors import ConfigError
 from ..model.problem import Problem
-from ..nlp.schemes import DEFAULT_RULE, DEFAULT_SCHEME
 from ..nlp.fatrop import TIMED_OUT
+from ..nlp.schemes import DEFAULT_RULE, DEFAULT_SCHEME
 from ..nlp.transcription import (
     DEFAULT_BACKEND,
     MAX_SECONDS,
@@ -30,9 +30,9 @@ from ..nlp.transcription import (
 )
 from ..nlp.watch import Listener
 from . import mesh, richardson
+from .diagnostics import replay_of
 from .guesses import as_guess, geodesic_guesses, interpolate, model_guesses, perturbed_guesses
 from .interrupt import Interrupt, interruptible
-from .diagnostics import replay_of
 from .readout import control_ppoly, make_solution
 from .solution import Solution
 from .verdict import REPLAY_TOLERANCE, scales

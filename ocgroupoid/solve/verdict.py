@@ -194,5 +194,6 @@ def _rule_range(tr: Transcription, d: dict[str, Any], order: int) -> list[str]:
         elif angle > 0.5 * ret.step_limit:
             failures.append(f"{name} turns {angle:.3g} rad in one step (more than half of "
                             f"{ret.step_limit:.2f}, where {tr.scheme.retraction} is singular): "
-                            f"increase N to {suggested_N(tr.N, angle / (0.25 * ret.step_limit), order)}")
+                            "increase N to "
+                            f"{suggested_N(tr.N, angle / (0.25 * ret.step_limit), order)}")
     return failures

@@ -148,7 +148,7 @@ def _landing(tr: Transcription, states: ca.MX, velocities: ca.MX, steps: ca.MX, 
         scales.append(ca.fmax(path, straight))
     if y is not None and tr.problem.end_velocities:
         VT = p[tr.layout.p_slices["VN"]]
-        for f, vs in zip(G.factors, G.velocity_layout.slices):
+        for vs in G.velocity_layout.slices:
             mask = m.end_velocity[vs]
             if mask.any():
                 keep = np.flatnonzero(mask).tolist()
