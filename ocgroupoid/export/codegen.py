@@ -146,8 +146,8 @@ def verify_export(tr: Transcription, ipopt: dict[str, Any] | None) -> ca.Functio
     fn = verify_function(tr, replay_of(tr), EXPORT_SUBSTEPS, check_tolerance(ipopt),
                          REPLAY_TOLERANCE)
     x, p, lam = ca.MX.sym("x", tr.nx), ca.MX.sym("p", tr.np), ca.MX.sym("lam_g", tr.ng)
-    return ca.Function("ocg_gen_verify", [x, p, lam], fn(x, p, lam), ["x", "p", "lam_g"],
-                       ["ratios", "figures"])
+    return ca.Function("ocg_gen_verify", [x, p, lam], fn(x, p, lam),  # type: ignore[call-overload]
+                       ["x", "p", "lam_g"], ["ratios", "figures"])  # (stubs: one MX, not two)
 
 
 #: what a failed check of the exported verdict says (the order of verify_graph.CHECKS)
@@ -209,7 +209,7 @@ def casadi_dir() -> Path:
     return Path(ca.__file__).resolve().parent
 
 
-def _ipopt_paths(lib: Path | None, include: Path | None) -> tuple[Path, Path]:
+def _ipopt_paths(lib: str | Path | None, include: str | Path | None) -> tuple[Path, Path]:
     lib = Path(lib) if lib is not None else casadi_dir()
     include = Path(include) if include is not None else casadi_dir() / "include"
     if not any(lib.glob("libipopt.so*")) and not any(lib.glob("libipopt*.dylib")):
@@ -548,7 +548,7 @@ def export_c(problem: Problem | Solver, folder: str | Path, N: int = 64,
     pb = tr.problem
     info = {"PROBLEM": plain_name(pb.name), "N": tr.N, "RETRACTION": tr.disc.retraction,
             "RULE": tr.disc.rule, "ORDER": pb.order, "NX": tr.nx, "NP": tr.np, "NG": tr.ng,
-            "NV": tr.values.size, "VERSION": __version__, "CASADI": ca.__version__,
+            "NV": tr.values.size, "VERSION": __version__, "CASADI": ca.__version__,  # type: ignore[attr-defined]  # not in its stubs
             "IPOPT_LIB": lib, "IPOPT_INCLUDE": include, "GUESS": _one_line(guess),
             "BACKEND": tr.backend, "BACKEND_LIBS": BACKEND_LIBS[tr.backend],
             "KEYS": _blocks_table(tr.values)}

@@ -161,7 +161,7 @@ class ObjectiveSection(Strict):
 class DiscretizationSection(Strict):
     """Scheme, retraction of the group factors and rule of the constraints."""
 
-    scheme: Literal[(*SCHEME_NAMES, "auto")] = Field(  # type: ignore[valid-type]
+    scheme: Literal[SCHEME_NAMES + ("auto",)] = Field(  # type: ignore[valid-type]
         "order2", description="discretisation scheme (ocgroupoid list shows them), or auto "
         "(with horizon.N: auto): whichever meets the accuracy with less IPOPT time")
     retraction: Literal[RETRACTION_NAMES] = Field(  # type: ignore[valid-type]
