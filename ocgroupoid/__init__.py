@@ -11,6 +11,8 @@ guesses, read-out, diagnostics, solution) -> ``models`` (canonical systems) -> `
 """
 
 from . import _startup  # noqa: F401  (first: Ctrl-C while the command line starts, one line)
+
+# isort: split
 from . import lie
 from ._version import __version__
 from .errors import (
@@ -24,8 +26,7 @@ from .errors import (
 )
 from .export import export_c
 from .groupoid import Groupoid, LieGroupFactor, Pair, SphereAction
-from .lie import so3
-from .lie import SE2, SE3, SO3, se2, se3
+from .lie import SE2, SE3, SO3, se2, se3, so3
 from .model import GuessContext, Problem
 from .nlp import Discretization, Guess, Transcription
 from .plotting import plot, view  # registers Solution.plot; matplotlib loads on use

@@ -9,7 +9,6 @@ SIGTERM (a solve writes its best point so far, a sweep keeps its finished points
 from __future__ import annotations
 
 import os
-import sys
 import time
 from contextlib import nullcontext
 from pathlib import Path
@@ -403,7 +402,7 @@ def _status(message: str, quiet: bool) -> Any:
     return nullcontext() if quiet else err.status(message, spinner="dots")
 
 
-def _silent(_: str) -> None:
+def _silent(_: object) -> None:
     return None
 
 
@@ -544,4 +543,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    main()

@@ -24,7 +24,9 @@ def arguments(description: str) -> argparse.Namespace:
     ap = argparse.ArgumentParser(description=description)
     ap.add_argument("--out", type=Path, default=RESULTS, help="folder for JSON and PNG")
     ap.add_argument("--quick", action="store_true", help="small sizes and few repeats (CI)")
-    return ap.parse_args()
+    args = ap.parse_args()
+    args.out.mkdir(parents=True, exist_ok=True)  # results/ is not tracked: made on first use
+    return args
 
 
 def progress() -> Progress:

@@ -63,8 +63,8 @@ class Shooting:
         """Terminal error of the piecewise-constant controls through the true dynamics."""
         h, z = self.T / self.N, np.asarray(z0, dtype=float)
         for k in range(self.N):
-            z = solve_ivp(lambda t, z: np.array(self.f(z, U[k])).ravel(), (k * h, (k + 1) * h),
-                          z, method="DOP853", rtol=1e-12, atol=1e-12).y[:, -1]
+            z = solve_ivp(lambda t, z: np.array(self.f(z, U[k])).ravel(),  # noqa: B023 (called here)
+                          (k * h, (k + 1) * h), z, method="DOP853", rtol=1e-12, atol=1e-12).y[:, -1]
         return self.terminal_error(z)
 
 
@@ -129,8 +129,8 @@ def plate_ball(N: int, r: float = 1.0, Omega_p: float = 1.0, c: float = 0.0, T: 
     V = np.diff(path, axis=0) / (T / N)
     z, X = np.array([0, 0, 1.0, 0, 0, 0]), [np.array([0, 0, 1.0, 0, 0, 0])]
     for k in range(N):  # roll along the guessed path
-        z = np.array(solve_ivp(lambda t, z: np.array(f(z, V[k])).ravel(), (0, T / N), z,
-                               rtol=1e-10, atol=1e-10).y[:, -1])
+        z = np.array(solve_ivp(lambda t, z: np.array(f(z, V[k])).ravel(),  # noqa: B023 (called here)
+                               (0, T / N), z, rtol=1e-10, atol=1e-10).y[:, -1])
         X.append(z)
     x0 = np.concatenate([np.array(X).T.ravel(order="F"), V.ravel()])
 

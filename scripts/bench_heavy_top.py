@@ -19,9 +19,9 @@ import matplotlib  # noqa: E402
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-from matplotlib.ticker import NullLocator  # noqa: E402
 import numpy as np  # noqa: E402
 from _bench import arguments, median_time, order, progress, save  # noqa: E402
+from matplotlib.ticker import NullLocator  # noqa: E402
 
 import ocgroupoid as og  # noqa: E402
 from ocgroupoid.models.heavy_top import discrete_casimir, heavy_top  # noqa: E402

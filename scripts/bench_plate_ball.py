@@ -19,14 +19,14 @@ import matplotlib  # noqa: E402
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-from matplotlib.ticker import NullLocator  # noqa: E402
 import numpy as np  # noqa: E402
 from _bench import arguments, order, progress, save  # noqa: E402
+from matplotlib.ticker import NullLocator  # noqa: E402
 
 import ocgroupoid as og  # noqa: E402
 from ocgroupoid.models.plate_ball import plate_ball  # noqa: E402
-from ocgroupoid.solve import distinct_minima, make_solution  # noqa: E402
 from ocgroupoid.nlp import RawResult  # noqa: E402
+from ocgroupoid.solve import distinct_minima, make_solution  # noqa: E402
 
 OMEGAS = (0.0, 1.0)
 

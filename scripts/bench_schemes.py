@@ -28,8 +28,8 @@ import matplotlib  # noqa: E402
 import numpy as np  # noqa: E402
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
 import _shooting  # noqa: E402
+import matplotlib.pyplot as plt  # noqa: E402
 from _bench import arguments, progress, save  # noqa: E402
 
 import ocgroupoid as og  # noqa: E402

@@ -156,7 +156,8 @@ def integrate_numerically(start: Pose, omega: Callable[[float], float], times: n
     for a, b in zip(times[:-1], times[1:]):
         if b > a:
             last = np.nextafter(b, a)
-            sol = solve_ivp(lambda t, z: [np.cos(z[2]), np.sin(z[2]), omega(min(t, last))],
+            sol = solve_ivp(lambda t, z: [np.cos(z[2]), np.sin(z[2]),
+                                          omega(min(t, last))],  # noqa: B023 (called here)
                             (a, b), pose, method="DOP853", rtol=tol, atol=tol)
             pose = sol.y[:, -1]
     return pose

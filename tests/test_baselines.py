@@ -9,8 +9,7 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 
 import ocgroupoid as og
 from ocgroupoid import files

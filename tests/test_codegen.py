@@ -21,8 +21,8 @@ from typer.testing import CliRunner
 import ocgroupoid as og
 from ocgroupoid import files
 from ocgroupoid.cli import app
-from ocgroupoid.export.codegen import Export, export_c, make, params_text, write_params
 from ocgroupoid.errors import ConfigError, ExportError
+from ocgroupoid.export.codegen import Export, export_c, make, params_text, write_params
 
 ROOT = Path(__file__).resolve().parent.parent
 #: every problem file but the minimum-time quadrotor, whose NLP is the quadrotor's with a free
@@ -93,6 +93,7 @@ def load_case(case: Case, folder: Path) -> files.Config:
                       ([f"solver.backend={case.backend}"] if case.backend else []))
 N_TEST = 16
 from .cbuild import CFLAGS  # noqa: E402
+
 TOL = 1e-8  # the tolerance on cost and trajectory
 VALGRIND = ["so3_rest_to_rest", "heavy_top_rotors", "plate_ball"]
 
@@ -179,8 +180,9 @@ def assert_same(c: og.Solution, py: og.Solution) -> None:
     assert c.discretization["scheme"] == py.discretization["scheme"]
     np.testing.assert_allclose(c.control_ppoly["x"], py.control_ppoly["x"], rtol=0, atol=1e-12)
     assert c.control_ppoly["c"].shape == py.control_ppoly["c"].shape
+    largest = float(np.max(np.abs(py.control_ppoly["c"]), initial=0.0))
     np.testing.assert_allclose(c.control_ppoly["c"], py.control_ppoly["c"], rtol=0,
-                               atol=TOL * max(1.0, float(np.max(np.abs(py.control_ppoly["c"]), initial=0.0))))
+                               atol=TOL * max(1.0, largest))
     assert c.control_names == py.control_names
     np.testing.assert_allclose(c.x, py.x, rtol=0, atol=TOL)
     np.testing.assert_allclose(c.p, py.p, rtol=0, atol=1e-14)

@@ -27,20 +27,18 @@ import sys
 import types
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Iterator, Literal, Union, get_args, get_origin
+from typing import Any, Iterator, Union, get_args, get_origin
 
 import pytest
 import yaml
 from pydantic import BaseModel, Field
 
-from docsgen import cli as cli_reference
-from docsgen import hooks
-from docsgen import schema as schema_reference
+from docsgen import cli as cli_reference, hooks, schema as schema_reference
 from ocgroupoid import files
 from ocgroupoid.files.custom import Definition
 from ocgroupoid.files.schema import ProblemFile
-from ocgroupoid.models import MODELS
 from ocgroupoid.model.values import Strict
+from ocgroupoid.models import MODELS
 
 ROOT = Path(__file__).resolve().parent.parent
 PAGES = sorted((ROOT / "docs").rglob("*.md")) + [ROOT / "README.md"]

@@ -15,11 +15,11 @@ import pytest
 
 import ocgroupoid as og
 from ocgroupoid.export.codegen import EXPORT_IPOPT, export_c, positive_parameters
-
-from .cbuild import CFLAGS
 from ocgroupoid.model.ranges import FILE_BYTES, block_range
 from ocgroupoid.models import MODELS
 from ocgroupoid.models.rigid_body import rigid_body
+
+from .cbuild import CFLAGS
 
 SEED = 30
 MUTANTS = 40

@@ -8,12 +8,23 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given
-from hypothesis import strategies as st
+from hypothesis import given, strategies as st
 from scipy.optimize import root
 
-from .dubins_exact import (CASES, TURN, WORDS, Pose, centre, controls, drive, integrate,
-                                integrate_numerically, shortest, turn_rate, words)
+from .dubins_exact import (
+    CASES,
+    TURN,
+    WORDS,
+    Pose,
+    centre,
+    controls,
+    drive,
+    integrate,
+    integrate_numerically,
+    shortest,
+    turn_rate,
+    words,
+)
 
 ORIGIN: Pose = (0.0, 0.0, 0.0)
 TWO_PI = 2.0 * np.pi

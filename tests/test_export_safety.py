@@ -16,7 +16,6 @@ from typer.testing import CliRunner
 
 import ocgroupoid as og
 from ocgroupoid import files
-from ocgroupoid.files import source
 from ocgroupoid.cli import app
 from ocgroupoid.errors import ConfigError, ExportError
 from ocgroupoid.export import codegen
@@ -27,12 +26,14 @@ from ocgroupoid.export.codegen import (
     plain_name,
     positive_parameters,
 )
+from ocgroupoid.files import source
 from ocgroupoid.models import MODELS
 from ocgroupoid.models.rigid_body import rigid_body
 
 ROOT = Path(__file__).resolve().parent.parent
 SO3 = ROOT / "problems" / "so3_rest_to_rest.yaml"
 from .cbuild import CFLAGS  # noqa: E402
+
 runner = CliRunner()
 # A name as hostile as a file name or a `name:` key can make it: a line break and a make
 # assignment that runs a command, a comment end, quotes, a trigraph, a placeholder, a

@@ -12,17 +12,15 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 from typer.testing import CliRunner
 
 import ocgroupoid as og
-from ocgroupoid.nlp import Kind
 from ocgroupoid.cli import app
 from ocgroupoid.errors import BoundaryError
 from ocgroupoid.models.heavy_top import discrete_casimir, heavy_top
+from ocgroupoid.nlp import Guess, Kind
 from ocgroupoid.solve import interpolate
-from ocgroupoid.nlp import Guess
 
 NS = [32, 64, 128, 256]
 FINE = [512, 1024]

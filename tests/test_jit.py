@@ -15,7 +15,6 @@ from ocgroupoid.errors import ConfigError
 from ocgroupoid.models.heavy_top import heavy_top
 from ocgroupoid.models.rigid_body import rigid_body
 
-
 needs_cc = pytest.mark.skipif(not any(shutil.which(c) for c in ("cc", "gcc", "clang")),
                               reason="no C compiler on PATH")
 

@@ -15,10 +15,10 @@ from scipy.integrate import solve_ivp
 from typer.testing import CliRunner
 
 import ocgroupoid as og
-from ocgroupoid.nlp import Kind
 from ocgroupoid import files
 from ocgroupoid.cli import app
 from ocgroupoid.models.plate_ball import plate_ball
+from ocgroupoid.nlp import Kind
 from ocgroupoid.solve import distinct_minima, interpolate
 from ocgroupoid.solve.guesses import model_guesses
 

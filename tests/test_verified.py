@@ -20,7 +20,6 @@ from ocgroupoid.cli import app
 from ocgroupoid.models.rigid_body import rigid_body
 
 from . import dubins_exact as dubins
-
 from .cbuild import CFLAGS  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent

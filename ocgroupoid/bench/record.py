@@ -23,7 +23,7 @@ from ..solve.solution import _jsonable, write_atomic
 
 def machine() -> dict[str, str]:
     """What the timings were measured on (and how busy it was when the run ended)."""
-    return {"python": platform.python_version(), "casadi": casadi.__version__,
+    return {"python": platform.python_version(), "casadi": casadi.__version__,  # type: ignore[attr-defined]  # not in its stubs
             "ocgroupoid": __version__, "machine": platform.machine(),
             "processor": platform.processor() or "unknown", "cpus": str(os.cpu_count()),
             "load_average_1min": f"{os.getloadavg()[0]:.2f}"}

@@ -71,7 +71,7 @@ def row(method: Method, N: int, timed: Timed, ref: dict[str, Any], finest: Solut
     cost_error = abs(sol.cost - J_ref) / abs(J_ref) if solved else None
     deviation = path_deviation(sol, finest) if solved else None
     minimum = which_minimum(sol.cost, J_ref, deviation, [m["cost"] for m in ref["minima"]],
-                            ref["start_cost"]) if solved else None
+                            ref["start_cost"]) if deviation is not None else None  # (solved)
     return {"kind": "row", "method": method.label, "scheme": method.scheme,
             "retraction": method.retraction, "N": N, "status": sol.status,
             "success": sol.success, "cost": sol.cost, "iterations": sol.iterations,
@@ -161,7 +161,7 @@ def work_precision(path: Path, overrides: list[str], out: Path, methods: list[Me
                 rows.append(r)
     progress(f"{name}: chart", total, total)
     by_method = lines(rows)
-    summary = {
+    summary: dict[str, Any] = {
         "problem": name, "file": str(path), "overrides": overrides,
         "settings": {"N": Ns, "repeats": repeats, "reference_N": reference_N,
                      "methods": [m.label for m in methods], "ipopt": setting.ipopt,

@@ -126,7 +126,7 @@ def casadi_dir() -> Path:
     return Path(ca.__file__).resolve().parent
 
 
-def _ipopt_paths(lib: Path | None, include: Path | None) -> tuple[Path, Path]:
+def _ipopt_paths(lib: str | Path | None, include: str | Path | None) -> tuple[Path, Path]:
     lib = Path(lib) if lib is not None else casadi_dir()
     include = Path(include) if include is not None else casadi_dir() / "include"
     if not any(lib.glob("libipopt.so*")) and not any(lib.glob("libipopt*.dylib")):
@@ -425,7 +425,8 @@ def export_c(problem: Problem | Solver, folder: str | Path, N: int = 64,
     info = {**names, "PROBLEM": plain_name(pb.name), "N": tr.N,
             "RETRACTION": tr.disc.retraction, "RULE": tr.disc.rule, "ORDER": pb.order,
             "NX": tr.nx, "NP": tr.np, "NG": tr.ng, "NV": tr.values.size,
-            "CASADI": ca.__version__, "IPOPT_LIB": lib, "IPOPT_INCLUDE": include,
+            "CASADI": ca.__version__,  # type: ignore[attr-defined]  # not in its stubs
+            "IPOPT_LIB": lib, "IPOPT_INCLUDE": include,
             "GUESS": _one_line(guess), "BACKEND": tr.backend,
             "BACKEND_LIBS": BACKEND_LIBS[tr.backend], "KEYS": _blocks_table(tr.values)}
     files["Makefile"] = _render("Makefile.in", {

@@ -56,7 +56,8 @@ def verify_export(tr: Transcription, ipopt: dict[str, Any] | None, prefix: str) 
     fn = verify_function(tr, replay_of(tr), EXPORT_SUBSTEPS, check_tolerance(ipopt),
                          REPLAY_TOLERANCE)
     x, p, lam = ca.MX.sym("x", tr.nx), ca.MX.sym("p", tr.np), ca.MX.sym("lam_g", tr.ng)
-    return ca.Function(f"{prefix}gen_verify", [x, p, lam], fn(x, p, lam), ["x", "p", "lam_g"],
+    return ca.Function(f"{prefix}gen_verify", [x, p, lam],  # type: ignore[call-overload]
+                       fn(x, p, lam), ["x", "p", "lam_g"],  # (stubs: one MX, not two)
                        ["ratios", "figures"])
 
 

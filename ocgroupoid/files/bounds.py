@@ -24,7 +24,6 @@ from ..model.problem import Problem
 from ..model.values import number
 from .expressions import CONSTANTS, compile_expression
 
-
 _COMPONENT = re.compile(r"\s*([A-Za-z_]\w*)\s*\[\s*([-+]?\d+)?\s*(?::\s*([-+]?\d+)?\s*)?\]\s*")
 
 

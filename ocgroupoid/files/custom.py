@@ -25,8 +25,8 @@ their state name) and the states of group factors (a rotation as its 3x3 matrix,
 its 4x4 homogeneous matrix: ``g[2, 3]`` is the height); the velocities (by name); their
 rates ``<velocity>_dot`` (order 2); and, with a Lagrangian, the controls ``u`` (and each
 control by its name). ``path`` entries are ``expression <= 0``, or comparisons
-``lhs <= rhs``, ``lhs >= rhs`` and ``lhs == rhs`` (an equality path constraint). Without a Lagrangian,
-``controls`` maps names to expressions. ``order: 1`` gives a first-order problem
+``lhs <= rhs``, ``lhs >= rhs`` and ``lhs == rhs`` (an equality path constraint). Without a
+Lagrangian, ``controls`` maps names to expressions. ``order: 1`` gives a first-order problem
 ``min int cost(q, y) dt`` subject to the constraints. The optional ``describe`` maps names to
 their unit (``x: m``) or to ``{meaning, unit, components, group}`` for plots and solution
 files (:meth:`~ocgroupoid.model.problem.Problem.describe`).

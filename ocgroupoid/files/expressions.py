@@ -137,7 +137,7 @@ class _Compiler:
         try:
             value = float(node.value)
         except OverflowError:
-            digits = int(abs(node.value).bit_length() * 0.30103) + 1
+            digits = int(abs(int(node.value)).bit_length() * 0.30103) + 1  # only ints overflow
             raise self.fail(node, f"the integer of about {digits} digits is too large for a "
                             "float (beyond 1.8e+308)", "write a smaller number") from None
         if math.isinf(value):

@@ -37,10 +37,10 @@ from ..errors import ConfigError
 from ..model.problem import Problem
 from ..models import MODELS
 from ..models.registry import ModelSpec
+from ..nlp.schemes import SCHEME_NAMES
 from . import bounds, limits
 from .custom import Definition, spec as custom_spec
 from .expressions import CONSTANTS, FUNCTIONS, compile_expression
-from ..nlp.schemes import SCHEME_NAMES
 from .messages import validate
 from .scale import check_scale
 from .schema import ProblemFile
@@ -103,12 +103,13 @@ def load(path: str | Path | None = None, overrides: list[str] | None = None,
         hint = f" did you mean {close[0]!r}?" if close else ""
         raise ConfigError(f"{locate('model')}: unknown model {top.model!r};{hint} "
                           f"choose one of {', '.join(sorted(MODELS))} or custom")
-    sections = [validate(schema, data.get(key), (key,), locate)
-                for key, schema in (("parameters", spec.parameters), ("initial", spec.initial),
-                                    ("final", spec.final))]
+    parameters, initial, final = [
+        validate(schema, data.get(key), (key,), locate)
+        for key, schema in (("parameters", spec.parameters), ("initial", spec.initial),
+                            ("final", spec.final))]
     check_scale(data, spec, locate)
-    return Config(Path(path) if path is not None else None, top, spec, *sections, raw=data,
-                  locate=locate)
+    return Config(Path(path) if path is not None else None, top, spec, parameters, initial,
+                  final, raw=data, locate=locate)
 
 
 CONSTANT_SECTIONS = ("parameters", "initial", "final")  # numbers may be written as pi/2

@@ -7,13 +7,14 @@ import re
 from typing import Any
 
 from pydantic import BaseModel, ValidationError
+from pydantic_core import ErrorDetails
 
 from ..errors import ConfigError
 from ..model.values import short
 from .source import Locator
 
 
-def _fix(err: dict[str, Any], key: str, known: list[str] | None) -> str:
+def _fix(err: ErrorDetails, key: str, known: list[str] | None) -> str:
     """A message with the fix for one pydantic error."""
     kind, value = err["type"], err.get("input")
     ctx = err.get("ctx") or {}

@@ -18,7 +18,6 @@ from ..nlp.schemes import SCHEME_NAMES
 from ..nlp.transcription import BACKENDS, DEFAULT_BACKEND, MAX_SECONDS
 from ..solve.auto import ACCURACY_MAX, N_MAX, N_MIN
 
-
 #: perturbed starts of ``solver.multistart`` (each is a full IPOPT solve) and coarse grids
 #: of ``solver.continuation``
 MULTISTART_MAX = 1000
@@ -163,7 +162,7 @@ class ObjectiveSection(Strict):
 class DiscretizationSection(Strict):
     """Scheme, retraction of the group factors and rule of the constraints."""
 
-    scheme: Literal[(*SCHEME_NAMES, "auto")] = Field(  # type: ignore[valid-type]
+    scheme: Literal[SCHEME_NAMES + ("auto",)] = Field(  # type: ignore[valid-type]
         "order2", description="discretisation scheme (ocgroupoid list shows them), or auto "
         "(with horizon.N: auto): whichever meets the accuracy with less IPOPT time")
     retraction: Literal[RETRACTION_NAMES] = Field(  # type: ignore[valid-type]

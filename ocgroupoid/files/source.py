@@ -116,6 +116,7 @@ def _check_depth(text: str) -> None:
         if isinstance(event, yaml.CollectionStartEvent):
             depth += 1
             if depth > LIMITS["depth"]:
+                assert event.start_mark is not None  # the parser marks every event
                 raise Refusal(event.start_mark.line + 1, f"lists and mappings nested more than "
                               f"{LIMITS['depth']} deep; a problem file needs a few levels")
         elif isinstance(event, yaml.CollectionEndEvent):
@@ -189,8 +190,8 @@ def _lines(node: yaml.Node | None, prefix: tuple = ()) -> dict[tuple, int]:
             out.update(_lines(v, path))
     elif isinstance(node, yaml.SequenceNode):
         for i, v in enumerate(node.value):
-            out[(*prefix, i)] = v.start_mark.line + 1
-            out.update(_lines(v, (*prefix, i)))
+            out[prefix + (i,)] = v.start_mark.line + 1
+            out.update(_lines(v, prefix + (i,)))
     return out
 
 

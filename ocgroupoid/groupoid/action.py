@@ -49,8 +49,8 @@ def tangent_basis(n: Array) -> tuple[Array, Array]:
     ``t1 = n x e / |n x e|`` with e the axis of the smallest ``|n_i|`` (the first one on
     ties), ``t2 = n x t1``."""
     a = ca.fabs(n)
-    e = ca.if_else(ca.logic_and(a[0] <= a[1], a[0] <= a[2]), ca.DM([1, 0, 0]),
-                   ca.if_else(a[1] <= a[2], ca.DM([0, 1, 0]), ca.DM([0, 0, 1])))
+    e = ca.if_else(ca.logic_and(a[0] <= a[1], a[0] <= a[2]), ca.DM([1, 0, 0]),  # type: ignore[index]  # Array = Any (lie/group.py)
+                   ca.if_else(a[1] <= a[2], ca.DM([0, 1, 0]), ca.DM([0, 0, 1])))  # type: ignore[index]  # Array = Any (lie/group.py)
     t1 = ca.cross(n, e)
     t1 = t1 / ca.norm_2(t1)
     return t1, ca.cross(n, t1)

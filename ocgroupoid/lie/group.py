@@ -26,7 +26,10 @@ from ._backend import is_symbolic
 if TYPE_CHECKING:
     from .form import StateForm
 
-Array = Any  # numpy.ndarray | casadi.SX | casadi.MX | casadi.DM
+# numpy.ndarray | casadi.SX | casadi.MX | casadi.DM. mypy (2.4) resolves an overloaded call on
+# a value of this alias with casadi's first overload (Sparsity), not as Any: the few lines that
+# then fail to type-check say "type: ignore[...]  # Array = Any".
+Array = Any
 
 
 class LieGroup(ABC):

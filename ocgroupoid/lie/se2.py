@@ -18,8 +18,8 @@ there.
 
 from __future__ import annotations
 
-import sys
 import difflib
+import sys
 from typing import Any
 
 import casadi as ca
@@ -164,7 +164,7 @@ def dexp(x: Array) -> Array:
 def dexp_inv(x: Array) -> Array:
     """Its inverse ``[[1, 0], [-V^{-1} c, V^{-1}]]``."""
     Vi = V_inv(x[0])
-    return _blocks(1, ca.DM.zeros(1, 2), -ca.mtimes(Vi, _dexp_column(x)), Vi)
+    return _blocks(1, ca.DM.zeros(1, 2), -ca.mtimes(Vi, _dexp_column(x)), Vi)  # type: ignore[operator]  # Array = Any (lie/group.py)
 
 
 # ------------------------------------------------------------------------ Cayley map

@@ -13,8 +13,8 @@ their value nor their derivative is NaN.
 
 from __future__ import annotations
 
-import sys
 import difflib
+import sys
 from typing import Any
 
 import casadi as ca
@@ -129,7 +129,7 @@ def q_matrix(x: Array) -> Array:
     c1, c2, c3 = _q_coefficients(ca.dot(x[:3], x[:3]))
     WV, VW, W2 = ca.mtimes(W, V), ca.mtimes(V, W), ca.mtimes(W, W)
     WVW = ca.mtimes(WV, W)
-    return (V / 2 + c1 * (WV + VW + WVW) + c2 * (ca.mtimes(W2, V) + ca.mtimes(V, W2) - 3 * WVW)
+    return (V / 2 + c1 * (WV + VW + WVW) + c2 * (ca.mtimes(W2, V) + ca.mtimes(V, W2) - 3 * WVW)  # type: ignore[operator]  # Array = Any (lie/group.py)
             + c3 * (ca.mtimes(WVW, W) + ca.mtimes(W2, VW)))
 
 
@@ -144,7 +144,7 @@ def dexp(x: Array) -> Array:
 def dexp_inv(x: Array) -> Array:
     """Its inverse ``[[J^{-1}, 0], [-J^{-1} Q J^{-1}, J^{-1}]]``."""
     Ji = so3.dexp_inv(x[:3])
-    return _blocks(Ji, ca.DM.zeros(3, 3), -ca.mtimes(Ji, ca.mtimes(q_matrix(x), Ji)), Ji)
+    return _blocks(Ji, ca.DM.zeros(3, 3), -ca.mtimes(Ji, ca.mtimes(q_matrix(x), Ji)), Ji)  # type: ignore[operator]  # Array = Any (lie/group.py)
 
 
 # ------------------------------------------------------------------------ Cayley map
@@ -175,7 +175,7 @@ def dcay(x: Array) -> Array:
     of :func:`dcay_inv`."""
     w = x[:3]
     D = so3.dcay(w)
-    return _blocks(D, ca.DM.zeros(3, 3), ca.mtimes(so3.hat(x[3:6]), D) / 2,
+    return _blocks(D, ca.DM.zeros(3, 3), ca.mtimes(so3.hat(x[3:6]), D) / 2,  # type: ignore[operator]  # Array = Any (lie/group.py)
                    so3.half_cay_inv(w))
 
 

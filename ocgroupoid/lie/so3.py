@@ -8,12 +8,13 @@ Taylor branch built from a guarded argument, so neither value nor derivative is 
 
 from __future__ import annotations
 
-import sys
 import difflib
-from typing import Any, Sequence
+import sys
+from typing import Any
 
 import casadi as ca
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..errors import ConfigError, SingularityError
 from ._backend import dual, is_symbolic, safe_if, to_numpy
@@ -117,7 +118,7 @@ def dexp_inv(w: Array) -> Array:
 def cay(a: Array) -> Array:
     """Cayley map on so(3) (seed 000, eq. 63): ``I + 4/(4 + |a|^2) (hat(a) + hat(a)^2/2)``."""
     A = hat(a)
-    return ca.DM.eye(3) + 4 / (4 + ca.dot(a, a)) * (A + ca.mtimes(A, A) / 2)
+    return ca.DM.eye(3) + 4 / (4 + ca.dot(a, a)) * (A + ca.mtimes(A, A) / 2)  # type: ignore[operator]  # Array = Any (lie/group.py)
 
 
 @dual
@@ -285,7 +286,7 @@ def to_quaternion(R: Any) -> np.ndarray:
     return -q if q[0] < 0 else q
 
 
-def from_quaternion(q: Sequence[float]) -> np.ndarray:
+def from_quaternion(q: ArrayLike) -> np.ndarray:
     """Rotation of the quaternion (w, x, y, z); normalised, zero rejected."""
     q = np.asarray(q, dtype=float)
     if q.shape != (4,) or not np.all(np.isfinite(q)):
@@ -308,7 +309,7 @@ def from_quaternion(q: Sequence[float]) -> np.ndarray:
 ANGLE_MAX = 1e6  # rad: beyond, an angle has lost the digits that place it on the circle
 
 
-def from_rotvec(v: Sequence[float]) -> np.ndarray:
+def from_rotvec(v: ArrayLike) -> np.ndarray:
     """exp(hat(v)) of a rotation vector (axis times angle)."""
     v = np.asarray(v, dtype=float)
     if v.shape != (3,) or not np.all(np.isfinite(v)):
@@ -322,7 +323,7 @@ def from_rotvec(v: Sequence[float]) -> np.ndarray:
     return np.asarray(exp(v))
 
 
-def from_axis_angle(axis: Sequence[float], angle: float) -> np.ndarray:
+def from_axis_angle(axis: ArrayLike, angle: float) -> np.ndarray:
     """Rotation by ``angle`` (radians) about ``axis`` (normalised; zero rejected)."""
     axis = np.asarray(axis, dtype=float)
     if axis.shape != (3,) or not np.all(np.isfinite(axis)) or not np.isfinite(angle):

@@ -130,8 +130,11 @@ class Mechanics:
     def generalised_force(self, u: ca.SX, n: int) -> ca.SX:
         """F on all n velocities for the controls u (zero on the unactuated ones)."""
         F = ca.SX.zeros(n)
-        F[list(self.actuated)] = ca.mtimes(self.input_matrix, u) if self.force is None \
-            else ca.substitute(self.force, self.u, u)
+        if self.force is not None:
+            F[list(self.actuated)] = ca.substitute(self.force, self.u, u)
+        else:
+            assert self.input_matrix is not None  # split() sets one of the two
+            F[list(self.actuated)] = ca.mtimes(self.input_matrix, u)
         return F
 
 

@@ -243,7 +243,7 @@ class Problem:
         i, f = self.groupoid.by_state(name)
         v = f.shown(self.s[self.groupoid.state_layout.slices[i]])
         shape = f.shown_shape
-        return ca.reshape(v, shape[1], shape[0]).T if len(shape) == 2 else v
+        return ca.reshape(v, shape[1], shape[0]).T if len(shape) == 2 else v  # type: ignore[return-value]  # Array = Any (lie/group.py)
 
     def state(self, name: str) -> ca.SX:
         """Base coordinates of the factor whose node state is ``name`` (e.g. Gamma, theta)."""

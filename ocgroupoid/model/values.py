@@ -17,7 +17,6 @@ from pydantic import BaseModel, BeforeValidator, ConfigDict
 from ..errors import ConfigError
 from ..lie import se3, so3
 
-
 _REPR = reprlib.Repr()
 _REPR.maxlist = _REPR.maxtuple = 6
 _REPR.maxdict, _REPR.maxlevel, _REPR.maxstring, _REPR.maxother = 4, 2, 60, 60

@@ -30,13 +30,20 @@ import casadi as ca
 import numpy as np
 from pydantic import BaseModel, Field
 
-from ..model.values import (Number, Positive2, Positive3, Strict, UnitVector3, Vector2Free,
-                      Vector3Free)
-from ..nlp.schemes import Node
 from ..errors import ConfigError
 from ..groupoid import Groupoid, Pair, SphereAction
 from ..model.mechanics import anchor
 from ..model.problem import GuessContext, Problem
+from ..model.values import (
+    Number,
+    Positive2,
+    Positive3,
+    Strict,
+    UnitVector3,
+    Vector2Free,
+    Vector3Free,
+)
+from ..nlp.schemes import Node
 from .registry import ModelSpec, register
 
 if TYPE_CHECKING:

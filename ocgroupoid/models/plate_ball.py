@@ -48,10 +48,10 @@ import casadi as ca
 import numpy as np
 from pydantic import BaseModel, Field
 
-from ..model.values import Number, PositiveNumber, Rotation, Strict, Vector2, Vector2Free
 from ..groupoid import Groupoid, LieGroupFactor, Pair
 from ..lie import so3
 from ..model.problem import GuessContext, Problem
+from ..model.values import Number, PositiveNumber, Rotation, Strict, Vector2, Vector2Free
 from .registry import ModelSpec, register
 
 TARGET_XY = (1.0, 0.5)

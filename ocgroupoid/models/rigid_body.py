@@ -13,10 +13,10 @@ import casadi as ca
 import numpy as np
 from pydantic import BaseModel, Field
 
-from ..model.values import Positive3, Rotation, Strict, Vector3Free
 from ..groupoid import LieGroupFactor
 from ..lie import so3
 from ..model.problem import Problem
+from ..model.values import Positive3, Rotation, Strict, Vector3Free
 from .registry import ModelSpec, register
 
 INERTIA = (1.0, 2.0, 3.0)

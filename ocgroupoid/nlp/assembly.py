@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from enum import Enum
-from typing import Callable
+from typing import Any, Callable
 
 import casadi as ca
 import numpy as np
@@ -192,7 +192,7 @@ def _triplet(M: ca.SX) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _nonzeros(M: ca.SX) -> ca.SX:
-    return ca.vertcat(*M.nonzeros()) if M.nnz() else ca.SX(0, 1)
+    return ca.vertcat(*M.nonzeros()) if M.nnz() else ca.SX(0, 1)  # type: ignore[call-overload]  # SXElem
 
 
 def _stage_sums(blocks: list[Block], w: ca.MX) -> tuple[ca.MX, ca.MX, list[ca.MX]]:
@@ -218,11 +218,12 @@ def plain_nlp(blocks: list[Block], x: ca.MX, p: ca.MX) -> dict[str, ca.MX]:
     return {"x": x, "p": p, "f": f, "g": g}
 
 
-def assemble(blocks: list[Block], x: ca.MX, p: ca.MX) -> dict[str, ca.Function]:
+def assemble(blocks: list[Block], x: ca.MX, p: ca.MX) -> dict[str, Any]:
     """The NLP functions IPOPT needs, from the blocks: f, g and their derivatives.
 
-    Returns ``{"f", "g", "nlp_grad_f", "nlp_jac_g", "nlp_hess_l"}``; the last three carry
-    the names and signatures ``casadi.nlpsol`` looks up in its function cache.
+    Returns ``{"f", "g", "nlp_grad_f", "nlp_jac_g", "nlp_hess_l"}``: the expressions f and g
+    (``MX``) and three ``Function``s that carry the names and signatures ``casadi.nlpsol``
+    looks up in its function cache.
     """
     nx = x.numel()
     for b in blocks:  # the trailing entries that point into p in every column

@@ -26,6 +26,7 @@ vanish wherever the constraints ``Phi(q, y, dy) = 0`` hold, i.e. be a combinatio
 from __future__ import annotations
 
 from dataclasses import dataclass
+
 import casadi as ca
 import numpy as np
 

@@ -126,6 +126,7 @@ class FatropNLP:
         if jit:
             functions, self.jit_compiled = compiled(functions)
         sf = self.form
+        self.options: dict[str, Any]
         self.options = {"structure_detection": "manual", "N": sf.K, "nx": sf.nx, "nu": sf.nu,
                         "ng": sf.ng, "cache": functions, "print_time": False,
                         "fatrop": {"print_level": 0,

@@ -196,7 +196,7 @@ def stage_form(blocks: list[Block], nx: int) -> StageForm:
     # the gap rows, in block, column and row order, with the variable each defines
     row_start = np.cumsum([0] + [b.m * b.ncols for b in blocks])
     gap_row, gap_var = [], []
-    for b, stages, r0 in zip(blocks, col_stage, row_start):
+    for b, r0 in zip(blocks, row_start):
         nxt = _next_rows(b)
         if nxt.size:
             vs = b.idx[nxt]  # (m, ncols): row r of column c defines vs[r, c]

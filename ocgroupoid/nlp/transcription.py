@@ -24,6 +24,7 @@ from typing import Any, Callable
 
 import casadi as ca
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..errors import BoundaryError, ConfigError
 from ..lie.retraction import RETRACTION_NAMES
@@ -80,9 +81,10 @@ def nlpsol_options(ipopt: dict[str, Any] | None, fns: dict[str, ca.Function]) ->
 
 
 #: IPOPT options of a primal-dual warm start (Transcription.warm_solver)
-WARM_IPOPT = {"ipopt.warm_start_init_point": "yes", "ipopt.warm_start_bound_push": 1e-9,
-              "ipopt.warm_start_slack_bound_push": 1e-9, "ipopt.warm_start_mult_bound_push": 1e-9,
-              "ipopt.mu_init": 1e-6}
+WARM_IPOPT: dict[str, Any] = {
+    "ipopt.warm_start_init_point": "yes", "ipopt.warm_start_bound_push": 1e-9,
+    "ipopt.warm_start_slack_bound_push": 1e-9, "ipopt.warm_start_mult_bound_push": 1e-9,
+    "ipopt.mu_init": 1e-6}
 
 #: the NLP solvers: IPOPT on the whole sparse KKT system (MUMPS), or fatrop on the stage form
 #: (:mod:`~ocgroupoid.nlp.fatrop`)
@@ -407,12 +409,13 @@ class Transcription:
         P = pb.parameter_values(params)
         for b in self.values.blocks:
             end_name, _, name = b.key.partition(".")
-            bc = {"initial": start, "final": end}.get(end_name)
-            if bc is None:
+            side = {"initial": start, "final": end}.get(end_name)
+            given: ArrayLike | None
+            if side is None:
                 given = check_horizon(pb.T if T is None else T) if b.key == "T" else \
                     P[pb.parameter_slices[b.key]]
             else:
-                given = bc.states.get(name, bc.velocities.get(name))
+                given = side.states.get(name, side.velocities.get(name))
             if given is not None:
                 values[b.values] = [0.0 if c is None else c for c in np.atleast_1d(
                     np.asarray(given, dtype=object))]
@@ -602,8 +605,9 @@ class Transcription:
                                  "fatrop")
         lbg, ubg, lbx, ubx = self.bounds_function(p)
         warm = self._warm(guess)
-        solver, duals = self.solver, {}
-        if warm:
+        solver = self.solver
+        duals: dict[str, np.ndarray] = {}
+        if warm and guess.lam_g is not None and guess.lam_x is not None:  # (as _warm checked)
             solver, duals = self.warm_solver, {"lam_g0": guess.lam_g, "lam_x0": guess.lam_x}
         elif listener is not None:
             solver = self.watched_solver
@@ -630,9 +634,10 @@ class Transcription:
         if self.fatrop is not None:
             return self.fatrop.graph(x0, p)
         lbg, ubg, lbx, ubx = self.bounds_function(p)
-        warm = lam_g0 is not None and lam_x0 is not None
-        solver = self.warm_solver if warm else self.solver
-        duals = {"lam_g0": lam_g0, "lam_x0": lam_x0} if warm else {}
+        duals: dict[str, ca.MX] = {}
+        if lam_g0 is not None and lam_x0 is not None:
+            duals = {"lam_g0": lam_g0, "lam_x0": lam_x0}
+        solver = self.warm_solver if duals else self.solver
         r = solver(x0=x0, p=p, lbg=lbg, ubg=ubg, lbx=lbx, ubx=ubx, **duals)
         return {k: r[k] for k in ("x", "f", "g", "lam_g", "lam_x")}
 

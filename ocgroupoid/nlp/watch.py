@@ -9,7 +9,7 @@ holds it by reference for the solver's lifetime).
 
 from __future__ import annotations
 
-from typing import Callable
+from typing import Callable, Sequence
 
 import casadi as ca
 import numpy as np
@@ -50,7 +50,7 @@ class Watch(ca.Callback):
         """Arm for one solve with constraint bounds (lbg, ubg)."""
         self.listener, self.lbg, self.ubg, self.iteration = listener, lbg, ubg, 0
 
-    def eval(self, arg: list[ca.DM]) -> list[int]:
+    def eval(self, arg: Sequence[ca.DM]) -> list[int]:
         if self.listener is None:
             return [0]
         g = np.array(arg[2]).ravel()

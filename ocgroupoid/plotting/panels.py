@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..model.units import TANGENTS
 from .names import Names, Quantity, called, manifold, with_unit
@@ -72,7 +73,8 @@ def control_curve(sol: Any, per_piece: int = 12) -> tuple[np.ndarray, np.ndarray
     """The control polynomial sampled densely, piece by piece, with a NaN row between pieces
     so that a jump at a breakpoint is drawn as a jump."""
     x = np.asarray(sol.control_ppoly["x"], dtype=float)
-    ts, us = [], []
+    ts: list[ArrayLike] = []
+    us: list[np.ndarray] = []
     for a, b in zip(x[:-1], x[1:]):
         t = np.linspace(a, b, per_piece)
         ts += [t, [np.nan]]

@@ -173,7 +173,7 @@ def _inertia(sol: Solution) -> Any:
 
 
 def _axes_traces(length: float) -> tuple[Trace, ...]:
-    return tuple(Trace(f"tip of body {a}", c, tuple(length * e))  # type: ignore[arg-type]
+    return tuple(Trace(f"tip of body {a}", c, tuple(length * e))
                  for a, c, e in zip("xyz", AXIS_COLORS, np.eye(3)))
 
 

@@ -1,11 +1,11 @@
 """Solving a transcription: guesses, IPOPT (multi-start, continuation), the read-out into a
 Solution, and the checks that do not trust the solver."""
 
+from .auto import Level, solve_to_accuracy
 from .guesses import geodesic_guesses, interpolate, perturbed_guesses
 from .readout import make_solution
 from .solution import Solution, write_atomic
 from .solver import Minimum, Solver, compile, distinct_minima, solve
-from .auto import Level, solve_to_accuracy
 
 __all__ = ["Solver", "compile", "solve", "Solution", "Minimum", "distinct_minima",
            "make_solution", "geodesic_guesses", "perturbed_guesses", "interpolate",

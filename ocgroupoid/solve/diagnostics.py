@@ -215,6 +215,7 @@ def _lagrangian_gradient_p(tr: Transcription, x: np.ndarray, p: np.ndarray,
 def _terminal(tr: Transcription, s: np.ndarray, y: np.ndarray, p: np.ndarray) -> float:
     """The terminal cost at a final state (and velocity)."""
     pb, G = tr.problem, tr.problem.groupoid
+    assert pb.terminal is not None
     yy = y if y.size else np.zeros(G.algebra_dim)
     f = ca.Function("terminal", [pb.s, pb.y, pb.P], [ca.substitute(
         pb.terminal, pb.q, G.base(pb.s))])

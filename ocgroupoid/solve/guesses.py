@@ -7,9 +7,9 @@ point (:attr:`~ocgroupoid.nlp.transcription.Transcription.point_function`).
 
 from __future__ import annotations
 
-import numpy as np
-
 from typing import Any
+
+import numpy as np
 
 from ..errors import ConfigError
 from ..model.problem import GuessContext
@@ -107,9 +107,9 @@ def as_guess(guess: Any, tr: Transcription, p: np.ndarray) -> Guess:
         T = guess.T if tr.problem.T_free else tr.horizon_of(p)  # a free T starts at its
         mid = (np.arange(tr.N) + 0.5) / tr.N * T
         scaled = t * (T / guess.T) if guess.T > 0 else t  # onto this horizon
-        xi = np.column_stack([np.interp(mid, scaled, V[:, j]) for j in range(dg)])
+        onto = np.column_stack([np.interp(mid, scaled, V[:, j]) for j in range(dg)])
         return Guess(f"interpolated from a solution ({guess.discretization.get('scheme')}, "
-                     f"N={guess.N})", xi, T=guess.T)
+                     f"N={guess.N})", onto, T=guess.T)
     if isinstance(guess, Guess):
         if guess.x is None and np.shape(guess.xi) != (tr.N, dg):
             raise ConfigError(f"guess {guess.label!r}: its velocities are shaped "

@@ -139,7 +139,8 @@ def remove_stale_temporaries(path: str | Path) -> list[Path]:
     """Remove the temporary files of :func:`write_atomic` for ``path`` whose writer is gone
     (killed mid-write); the removed paths."""
     path = Path(path)
-    pattern, removed = _temp_pattern(path.name), []
+    pattern = _temp_pattern(path.name)
+    removed: list[Path] = []
     try:
         entries = list(os.scandir(path.parent))
     except OSError:

@@ -219,10 +219,11 @@ class Replay:
         """``substep(z, c, t0, dt, P)``: one RK4 step from t0 over dt of the state with its
         running cost; ``sample(z, c, t, P) -> (H, |psi|)``: the bounds and constraints at a
         state and time; the input a polynomial in t with coefficients c (highest first)."""
-        assert self.rhs is not None and self.along is not None
-        nz = self.rhs.size1_in(0)
+        rhs, along = self.rhs, self.along
+        assert rhs is not None and along is not None
+        nz = rhs.size1_in(0)
         z, c, t0, dt, P = (ca.SX.sym(n, d) for n, d in (
-            ("z", nz + 1), ("c", k * m), ("t0", 1), ("dt", 1), ("P", self.rhs.size1_in(2))))
+            ("z", nz + 1), ("c", k * m), ("t0", 1), ("dt", 1), ("P", rhs.size1_in(2))))
         cm = ca.reshape(c, m, k)
 
         def u_at(t: ca.SX) -> ca.SX:
@@ -233,11 +234,11 @@ class Replay:
 
         def f(zz: ca.SX, s: float) -> ca.SX:
             u = u_at(t0 + s * dt)
-            L = self.along(zz[:nz], u, P)[0]
-            return ca.vertcat(self.rhs(zz[:nz], u, P), L)
+            L = along(zz[:nz], u, P)[0]
+            return ca.vertcat(rhs(zz[:nz], u, P), L)
 
         substep = ca.Function("substep", [z, c, t0, dt, P], [rk4(f, z, dt)])
-        vals = self.along(z[:nz], u_at(t0), P)
+        vals = along(z[:nz], u_at(t0), P)
         sample = ca.Function("sample", [z, c, t0, P], [vals[1], ca.fabs(vals[2])])
         return substep, sample
 

@@ -382,7 +382,8 @@ def initial_state(problem: Problem, initial: dict[str, Any] | None) -> tuple[np.
         else:
             raise ConfigError(f"initial.{name}: unknown; states are {G.state_names}, "
                               f"velocities {G.velocity_names}")
-    s0, V0 = [], []
+    s0: list[np.ndarray] = []
+    V0: list[np.ndarray] = []
     for f in G.factors:
         for name, value, out in ((f.state, states.get(f.state), s0),
                                  (f.velocity, velocities.get(f.velocity), V0)):

@@ -18,8 +18,8 @@ import numpy as np
 
 from ..errors import ConfigError
 from ..model.problem import Problem
-from ..nlp.schemes import DEFAULT_RULE, DEFAULT_SCHEME
 from ..nlp.fatrop import TIMED_OUT
+from ..nlp.schemes import DEFAULT_RULE, DEFAULT_SCHEME
 from ..nlp.transcription import (
     DEFAULT_BACKEND,
     MAX_SECONDS,
@@ -30,9 +30,9 @@ from ..nlp.transcription import (
 )
 from ..nlp.watch import Listener
 from . import mesh, richardson
+from .diagnostics import replay_of
 from .guesses import as_guess, geodesic_guesses, interpolate, model_guesses, perturbed_guesses
 from .interrupt import Interrupt, interruptible
-from .diagnostics import replay_of
 from .readout import control_ppoly, make_solution
 from .solution import Solution
 from .verdict import REPLAY_TOLERANCE, scales
@@ -248,9 +248,9 @@ class Solver:
             solution = replace(solution, hint="; ".join([*notes, *filter(None, [solution.hint])]))
         if coarse is not None and coarse[1].success and best.success and \
                 tr is self.transcription:  # Richardson from the last continuation grid
-            p = tr.scheme.accuracy
+            order = tr.scheme.accuracy
             solution.diagnostics["error_estimate"] = richardson.estimate(
-                best.cost, coarse[1].cost, tr.N, coarse[0].N, p, p)
+                best.cost, coarse[1].cost, tr.N, coarse[0].N, order, order)
         return replace(solution, starts=len(results),
                        ipopt_seconds_total=self._spent)
 

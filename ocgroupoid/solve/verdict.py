@@ -126,9 +126,10 @@ def tolerances(tr: Transcription, out: dict[str, np.ndarray], p: np.ndarray,
     landing = {n: float(replay_tolerance * v + FLOOR) for n, v in scale.items()}
     out_b: dict[str, float] = {}
     pb = tr.problem
-    if pb.inequalities:
+    sides = tr.scheme.stages.inequality_bounds()  # None without inequalities
+    if sides is not None:
         lo, hi = (np.array(v).ravel() for v in
-                  ca.Function("sides", [pb.P], list(tr.scheme.stages.inequality_bounds()))(
+                  ca.Function("sides", [pb.P], list(sides))(
                       tr.part(p, "P")))
         for name, a, b in zip(tr.scheme.stages.inequality_names, lo, hi):
             size = max([abs(v) for v in (a, b) if np.isfinite(v)] + [1.0])
@@ -194,5 +195,6 @@ def _rule_range(tr: Transcription, d: dict[str, Any], order: int) -> list[str]:
         elif angle > 0.5 * ret.step_limit:
             failures.append(f"{name} turns {angle:.3g} rad in one step (more than half of "
                             f"{ret.step_limit:.2f}, where {tr.scheme.retraction} is singular): "
-                            f"increase N to {suggested_N(tr.N, angle / (0.25 * ret.step_limit), order)}")
+                            "increase N to "
+                            f"{suggested_N(tr.N, angle / (0.25 * ret.step_limit), order)}")
     return failures

@@ -135,20 +135,21 @@ def _landing(tr: Transcription, states: ca.MX, velocities: ca.MX, steps: ca.MX, 
     measured against (:func:`~ocgroupoid.solve.verdict.scales`), as graphs."""
     G, m = tr.problem.groupoid, tr.masks
     target = p[tr.layout.p_slices["end"]]
-    errors, scales = [], []
+    errors: list[ca.MX] = []
+    scales: list[ca.MX] = []
     for f, ss, ts, vs, mask in zip(G.factors, G.state_layout.slices, G.target_layout.slices,
                                    G.velocity_layout.slices, m.end_state):
         if not mask.any():
             continue
         goal = f.state_of_target(target[ts])
         keep = np.flatnonzero(mask).tolist() if f.componentwise else slice(None)
-        errors.append(ca.norm_2(ca.vec(f.rminus(s[ss], goal))[keep]))
+        errors.append(ca.norm_2(ca.vec(f.rminus(s[ss], goal))[keep]))  # type: ignore[index, arg-type]
         path = ca.sum2(ca.sqrt(ca.sum1(steps[vs, :] ** 2)))
-        straight = ca.norm_2(ca.vec(f.rminus(states[ss, 0], goal))[keep])
+        straight = ca.norm_2(ca.vec(f.rminus(states[ss, 0], goal))[keep])  # type: ignore[index]
         scales.append(ca.fmax(path, straight))
     if y is not None and tr.problem.end_velocities:
         VT = p[tr.layout.p_slices["VN"]]
-        for f, vs in zip(G.factors, G.velocity_layout.slices):
+        for vs in G.velocity_layout.slices:
             mask = m.end_velocity[vs]
             if mask.any():
                 keep = np.flatnonzero(mask).tolist()

@@ -10,7 +10,7 @@ again.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, Iterator, Sequence
+from typing import TYPE_CHECKING, Any, Generator, Sequence
 
 from . import record
 from .task import Outcome, Task, solve_chunk
@@ -22,7 +22,8 @@ if TYPE_CHECKING:
 IN_FLIGHT = 2
 
 
-def outcomes(client: Client, tasks: Sequence[Task], slots: int) -> Iterator[list[Outcome]]:
+def outcomes(client: Client, tasks: Sequence[Task], slots: int
+             ) -> Generator[list[Outcome], None, None]:
     """Run ``tasks`` on ``client`` (``slots`` task slots) and yield each chunk's outcomes as
     it finishes. Unfinished chunks are cancelled when the caller stops (an interrupt, a write
     error), so the cluster is free for the resumed run."""

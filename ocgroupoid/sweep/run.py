@@ -26,8 +26,7 @@ from .dispatch import outcomes
 from .source import Source
 from .spec import axes, draws, points
 from .store import SweepDir
-from .structure import chunk_size as default_chunk_size
-from .structure import chunks, classify
+from .structure import chunk_size as default_chunk_size, chunks, classify
 from .table import frame, write_table
 from .task import WARM_MODES, Task, Warm
 

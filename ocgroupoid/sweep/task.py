@@ -92,6 +92,9 @@ def solver_for(structure: str, pb: Problem, cfg: Config, args: dict[str, Any]
         _solvers.move_to_end(structure)
         return solver, False
     f = cfg.file
+    if f.horizon.N == "auto":  # a grid search per point is not a sweep's compiled NLP
+        raise ConfigError("horizon.N: auto searches N point by point, which a sweep does not "
+                          "do: give an integer N (or sweep over horizon.N)")
     # the discretization section's keys (scheme, retraction, rule, ...) are compile()'s
     solver = compile(pb, f.horizon.N, ipopt=f.solver.ipopt, jit=f.solver.jit,
                      backend=f.solver.backend, max_seconds=f.solver.max_seconds,

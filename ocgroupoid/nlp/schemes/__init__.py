@@ -37,8 +37,9 @@ def make_scheme(name: str, problem: Problem, N: int, retraction: str, rule: str,
         raise ConfigError(f"discretization.bound_points imposes the bounds at more points "
                           f"inside order4's intervals; {name} evaluates them at its nodes: "
                           "choose scheme order4, or increase N")
-    return cls(problem, N, retraction, rule, bound_points) if bound_points else \
-        cls(problem, N, retraction, rule)
+    if bound_points:  # only the schemes with adaptive_steps take them (checked above)
+        return cls(problem, N, retraction, rule, bound_points)  # type: ignore[call-arg]
+    return cls(problem, N, retraction, rule)
 
 
 __all__ = ["Scheme", "Readout", "Node", "NodeMidpoint", "IntervalMidpoint", "QuadraticGauss",

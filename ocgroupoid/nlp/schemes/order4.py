@@ -38,7 +38,7 @@ all explicit: the constraints hold at the stages.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, cast
 
 import casadi as ca
 import numpy as np
@@ -97,8 +97,8 @@ def local_horizons(scheme: Scheme, pick: Pick) -> ca.MX:
     return pick(scheme.layout.steps[None, :])
 
 
-def gauss_blocks(scheme: Scheme, sizes: list[int], idx: np.ndarray, point: str,
-                 split: Any = None) -> list[Block]:
+def gauss_blocks(scheme: QuadraticGauss | GaussStages, sizes: list[int], idx: np.ndarray,
+                 point: str, split: Any = None) -> list[Block]:
     """The path block (cost and Phi_d at the two Gauss points of every interval) and, with
     bounds, the inequality block of an order4 scheme whose ``interval`` Function returns
     ``(L, Phi, H)``; ``split`` maps the stage inputs to the Function's arguments."""
@@ -201,11 +201,11 @@ class QuadraticGauss(Scheme):
                 y, dy = quadratic(y0, y1, b, h, c)
                 u_at[c] = self.stages.estimate(G.step(s, self.retractions, theta(c)), y, dy,
                                                pb.P, line)
-            samples = [u_at[float(c)] for c in SAMPLES]
+            samples = [cast(ca.SX, u_at[float(c)]) for c in SAMPLES]  # all four set above
             for c in self.bound_times:  # inside: the cubic the read-out reports
                 if u_at[float(c)] is None:
                     w = lagrange(SAMPLES, float(c))
-                    u_at[float(c)] = sum(float(w[i]) * samples[i] for i in range(4))
+                    u_at[float(c)] = cast(ca.SX, sum(float(w[i]) * samples[i] for i in range(4)))
 
         args = [s, y0, y1, b, ug, T, pb.P]
         names = ["s", "y0", "y1", "b", "u_gauss", "T", "P"]
@@ -232,6 +232,7 @@ class QuadraticGauss(Scheme):
             "control_samples", args,
             [ca.vertcat(*[at(u, float(c), u_at[float(c)]) for c in SAMPLES])], names, ["u"])
         if nu:
+            assert self.stages.estimate is not None
             #: ``gauss_controls(s_k, y_k, y_{k+1}, b_k, T, P) -> u_k`` that best explain the
             #: motion at the Gauss points (the guesses' controls)
             self.gauss_controls = ca.Function("gauss_controls", args[:4] + args[5:], [
@@ -383,8 +384,8 @@ class GaussStages(Scheme):
                                   G.velocity_of_rate(self.retractions, theta, rate))[0]
 
         stage_H = {float(GAUSS2[0]): sub[0][3], float(GAUSS2[1]): sub[1][3]}
-        H = ca.vertcat(*[stage_H.get(float(c), None) if float(c) in stage_H else elsewhere(
-            float(c)) for c in self.bound_times])
+        H = ca.vertcat(*[stage_H[float(c)] if float(c) in stage_H else elsewhere(float(c))
+                         for c in self.bound_times])
         args, names = [s, e1, e2, T, pb.P], ["s", "eta1", "eta2", "T", "P"]
         #: ``interval(s_k, eta_1, eta_2, T, P) -> (L_d, Phi_d, H)``: Phi_d at both stages, the
         #: bounds' expressions H at :attr:`bound_times`
@@ -456,7 +457,10 @@ class GaussStages(Scheme):
         S = ca.horzcat(pick(lay.s0), self.step_over(pick))
         y1, y2, u1, u2 = self.stage_values.map(N)(S[:, :-1], E[:dg, :], E[dg:, :], T, P)
         t = ((np.arange(N)[:, None] + GAUSS2[None, :]) / N).ravel()
-        interleave = lambda a, b: ca.reshape(ca.vertcat(a, b), a.size1(), 2 * N)  # noqa: E731
+
+        def interleave(a: ca.MX, b: ca.MX) -> ca.MX:
+            return ca.reshape(ca.vertcat(a, b), a.size1(), 2 * N)
+
         m = self.stages.controls.numel()
         coeff = linear_coefficients(u1, u2, GAUSS2[0], GAUSS2[1], T / N) if m \
             else ca.MX(0, N)

@@ -88,10 +88,12 @@ class RK4Shooting(Scheme):
             z = X[:self.nz]
             s = self.to_s(z)
             if self.second:
+                assert self.dynamics.acceleration is not None
                 y = X[self.nz:]
                 dy = self.dynamics.acceleration(s, y, u, pb.P)
                 return ca.vertcat(self.z_rate(z, y), dy), self.stages.at(quantities, s, y, dy,
                                                                          u)
+            assert self.dynamics.velocity is not None
             y = self.dynamics.velocity(s, u, pb.P)
             return self.z_rate(z, y), self.stages.at(quantities, s, y)
 
@@ -233,7 +235,7 @@ class RK4Shooting(Scheme):
         out = [(self.Z, Zg)]
         if not self.second:
             return out + [(self.U, ctrl.map(N)(S[:, :N], XI, ca.MX.zeros(XI.shape), P))]
-        m = self.layout.masks
+        m = lay.masks
         V0 = ca.vertcat(*[pick(lay.V0[i:i + 1]) if m.start_velocity[i] else XI[i, 0]
                           for i in range(XI.size1())])
         VN = ca.vertcat(*[pick(lay.VN[i:i + 1]) if m.end_velocity[i] else XI[i, N - 1]
@@ -255,6 +257,7 @@ class RK4Shooting(Scheme):
             V = pick(self.Y)
             velocity_t, steps = t, T / N * (V[:, :-1] + V[:, 1:]) / 2
         else:
+            assert self.dynamics.velocity is not None
             V = self.dynamics.velocity.map(N)(S[:, :N], U, P)
             velocity_t, steps = t[:N], T / N * V
         return Readout(steps, S, velocity_t, V, t[:N], U, t, U)
