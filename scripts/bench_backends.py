@@ -19,12 +19,15 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from _bench import arguments, median_time, progress, save
 
 from ocgroupoid import files
+from ocgroupoid.bench.record import write_summary
+from ocgroupoid.bench.script import arguments, steps
+from ocgroupoid.bench.timing import median_seconds
 from ocgroupoid.solve import compile as compile_problem
 
-PROBLEMS = Path(__file__).resolve().parent.parent / "problems"
+ROOT = Path(__file__).resolve().parent.parent
+PROBLEMS = ROOT / "problems"
 
 
 CONFIGS = (("ipopt", False), ("ipopt", True), ("fatrop", False), ("fatrop", True))
@@ -56,7 +59,7 @@ def measure(path: Path, N: int, scheme: str, repeats: int) -> dict[str, Any]:
                                                         "fatrop"]
         p = tr.pack()
         guess = tr.guesses(p)[0]
-        seconds, r = median_time(lambda: tr.solve(guess, p), repeats)  # noqa: B023 (called here)
+        seconds, r = median_seconds(lambda: tr.solve(guess, p), repeats)  # noqa: B023 (called here)
         row[f"{key}_solve_seconds"] = seconds
         row[f"{key}_iterations"] = r.iterations
         row[f"{key}_cost"] = r.cost
@@ -116,7 +119,7 @@ def chart(rows: list[dict[str, Any]], out: Path) -> None:
 
 
 def main() -> None:
-    args = arguments(__doc__.splitlines()[0])
+    args = arguments(__doc__.splitlines()[0], ROOT / "results")
     quick = args.quick
     # a private cache, so that every compile is measured (a shared one may hold them)
     os.environ["OCGROUPOID_JIT_CACHE"] = tempfile.mkdtemp(prefix="ocg-jit-bench-")
@@ -127,23 +130,22 @@ def main() -> None:
     args.out.mkdir(parents=True, exist_ok=True)
     rows: list[dict[str, Any]] = []
     configs = [(p, N, s) for p in paths for s in schemes for N in Ns]
-    with progress() as bar:
-        task = bar.add_task("backends", total=len(configs))
+    summary_path = args.out / "bench_backends.json"
+    with steps(len(configs)) as step:
         for path, N, scheme in configs:
-            bar.update(task, description=f"{path.stem} {scheme} N={N}")
+            step(f"{path.stem} {scheme} N={N}")
             try:
                 rows.append(measure(path, N, scheme, repeats))
             except Exception as e:  # a configuration that does not build is recorded
                 rows.append({"problem": path.stem, "N": N, "scheme": scheme,
                              "error": f"{type(e).__name__}: {e}"})
-            save(args.out, "bench_backends", {"rows": rows, "repeats": repeats})
-            bar.advance(task)
+            write_summary(summary_path, {"rows": rows, "repeats": repeats})
     done = [r for r in rows if "error" not in r]
     summary = {f"{r['problem']}/{r['scheme']}/N={r['N']}":
                {"best": r["best"], "speedup": r["speedup"],
                 **{k: r.get(k) for k in ("ipopt_break_even_solves",
                                          "fatrop_break_even_solves")}} for r in done}
-    save(args.out, "bench_backends", {
+    write_summary(summary_path, {
         "rows": rows, "repeats": repeats, "summary": summary,
         "median_speedup": float(np.median([r["speedup"] for r in done])),
         "fatrop_vm_over_ipopt_vm": {f"{r['problem']}/{r['scheme']}/N={r['N']}":

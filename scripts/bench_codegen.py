@@ -14,20 +14,18 @@ from __future__ import annotations
 
 import statistics
 import subprocess
-import sys
 import tempfile
 import time
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-
-import matplotlib  # noqa: E402
+import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-from _bench import arguments, progress, save  # noqa: E402
 
 from ocgroupoid import files  # noqa: E402
+from ocgroupoid.bench.record import write_summary  # noqa: E402
+from ocgroupoid.bench.script import arguments, steps  # noqa: E402
 from ocgroupoid.export.codegen import export_c, make  # noqa: E402
 from ocgroupoid.solve import geodesic_guesses  # noqa: E402
 
@@ -61,8 +59,8 @@ def cases(quick: bool) -> list[tuple[Path, int]]:
     so3 = ROOT / "problems" / "so3_rest_to_rest.yaml"
     if quick:
         return [(so3, 32)]
-    files = sorted((ROOT / "problems").glob("*.yaml"))
-    return [(f, files.load(f).file.horizon.N) for f in files] + [(so3, 256), (so3, 1024)]
+    paths = sorted((ROOT / "problems").glob("*.yaml"))
+    return [(f, files.load(f).file.horizon.N) for f in paths] + [(so3, 256), (so3, 1024)]
 
 
 def measure(path: Path, N: int, repeats: int, folder: Path) -> dict:
@@ -99,21 +97,18 @@ def measure(path: Path, N: int, repeats: int, folder: Path) -> dict:
 
 
 def main() -> None:
-    args = arguments(__doc__.splitlines()[0])
+    args = arguments(__doc__.splitlines()[0], ROOT / "results")
     repeats = 5 if args.quick else 15
     todo = cases(args.quick)
     rows = []
-    with progress() as bar, tempfile.TemporaryDirectory() as tmp:
-        task = bar.add_task("export, build, solve", total=len(todo))
+    with steps(len(todo)) as step, tempfile.TemporaryDirectory() as tmp:
         for i, (path, N) in enumerate(todo):
-            bar.update(task, description=f"{path.stem} N={N}")
+            step(f"export, build, solve: {path.stem} N={N}")
             rows.append(measure(path, N, repeats, Path(tmp) / f"case{i}"))
-            bar.advance(task)
     data = {"what": "median IPOPT solve time, exported C versus Python, same instance and "
                     "start", "rows": rows,
-            "ratios": {f"{r['problem']}_N{r['N']}": r["ratio_c_over_python"] for r in rows},
-            "created": time.strftime("%Y-%m-%d %H:%M:%S")}
-    path = save(args.out, "bench_codegen", data)
+            "ratios": {f"{r['problem']}_N{r['N']}": r["ratio_c_over_python"] for r in rows}}
+    path = write_summary(args.out / "bench_codegen.json", data)
     labels = [f"{r['problem']}\nN={r['N']}" for r in rows]
     x = range(len(rows))
     fig, ax = plt.subplots(1, 2, figsize=(max(8, 2.2 * len(rows) + 3), 4))

@@ -9,24 +9,26 @@ Casimir Pi . Gamma at the nodes and of the discrete Casimir, and the local minim
 
 from __future__ import annotations
 
-import sys
 import time
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-
-import matplotlib  # noqa: E402
+import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from _bench import arguments, median_time, order, progress, save  # noqa: E402
 from matplotlib.ticker import NullLocator  # noqa: E402
 
 import ocgroupoid as og  # noqa: E402
+from ocgroupoid.bench.record import write_summary  # noqa: E402
+from ocgroupoid.bench.reference import extrapolated  # noqa: E402
+from ocgroupoid.bench.script import arguments, rounded, steps  # noqa: E402
+from ocgroupoid.bench.timing import median_seconds  # noqa: E402
 from ocgroupoid.models.heavy_top import discrete_casimir, heavy_top  # noqa: E402
 from ocgroupoid.solve import interpolate  # noqa: E402
+from ocgroupoid.solve.richardson import observed_orders  # noqa: E402
 
+RESULTS = Path(__file__).resolve().parent.parent / "results"
 RULES = ("midpoint", "lie_poisson")
 
 
@@ -35,7 +37,7 @@ def row(solver: og.Solver, sol: og.Solution, seconds: float, repeats: int) -> di
     tr = solver.transcription
     best = sol.discretization.get("start")  # the label of the start that won
     guess = next((g for g in solver.guesses(tr, sol.p, True) if g.label == best), None)
-    ipopt_seconds = median_time(lambda: tr.solve(guess, sol.p), repeats)[0] if guess else \
+    ipopt_seconds = median_seconds(lambda: tr.solve(guess, sol.p), repeats)[0] if guess else \
         sol.solve_seconds
     d = sol.diagnostics
     rep = d["replay"]["terminal_error"]
@@ -55,18 +57,17 @@ def row(solver: og.Solver, sol: og.Solution, seconds: float, repeats: int) -> di
 
 
 def main() -> None:
-    args = arguments(__doc__.splitlines()[0])
+    args = arguments(__doc__.splitlines()[0], RESULTS)
     Ns = [32, 64] if args.quick else [32, 64, 128, 256]
     fine = [128] if args.quick else [512, 1024]
     repeats = 1 if args.quick else 5
     pb = heavy_top()
     table: dict[str, dict] = {}
-    with progress() as bar:
-        task = bar.add_task("heavy_top", total=len(RULES) * (len(Ns) + len(fine)))
+    with steps(len(RULES) * (len(Ns) + len(fine))) as step:
         for rule in RULES:
             rows, prev = [], None
             for N in [*Ns, *fine]:
-                bar.update(task, description=f"{rule} N={N}")
+                step(f"{rule} N={N}")
                 t0 = time.perf_counter()
                 solver = og.compile(pb, N=N, rule=rule)
                 if N in Ns:
@@ -77,21 +78,20 @@ def main() -> None:
                 seconds = time.perf_counter() - t0
                 rows.append(row(solver, sol, seconds, repeats if N in Ns else 1))
                 prev = (solver, sol)
-                bar.advance(task)
             costs = [r["cost"] for r in rows]
             table[rule] = {
                 "rows": rows,
-                "replay_order_Gamma": order([r["replay_error_Gamma"] for r in rows]),
-                "replay_order_velocity": order([r["replay_error_velocity"] for r in rows]),
-                "cost_order": order(list(np.abs(np.diff(costs)))),
-                "casimir_order": order([r["casimir_drift_nodes"] for r in rows]),
-                "cost_richardson": costs[-1] + (costs[-1] - costs[-2]) / 3}
+                "replay_order_Gamma": observed_orders([r["replay_error_Gamma"] for r in rows]),
+                "replay_order_velocity": observed_orders([r["replay_error_velocity"]
+                                                          for r in rows]),
+                "cost_order": observed_orders(np.abs(np.diff(costs)).tolist()),
+                "casimir_order": observed_orders([r["casimir_drift_nodes"] for r in rows]),
+                "cost_richardson": extrapolated(costs[-2], costs[-1], 2)}
     allN = [*Ns, *fine]
     data = {"problem": "heavy_top_rotors", "T": 3.0, "Ns_multistart": Ns, "Ns_continued": fine,
             "rules": list(RULES), "results": table,
-            "note": "2 cores shared with other jobs: times are indicative",
-            "created": time.strftime("%Y-%m-%d %H:%M:%S")}
-    path = save(args.out, "bench_heavy_top", data)
+            "note": "2 cores shared with other jobs: times are indicative"}
+    path = write_summary(args.out / "bench_heavy_top.json", data)
 
     fig, ax = plt.subplots(1, 4, figsize=(17, 4))
     style = {"midpoint": "o-", "lie_poisson": "s--"}
@@ -126,9 +126,9 @@ def main() -> None:
     fig.savefig(args.out / "bench_heavy_top.png", dpi=110)
 
     for rule, res in table.items():
-        print(f"{rule}: replay orders Gamma {np.round(res['replay_order_Gamma'], 2).tolist()}, "
-              f"velocity {np.round(res['replay_order_velocity'], 2).tolist()}, cost orders "
-              f"{np.round(res['cost_order'], 2).tolist()}, extrapolated cost "
+        print(f"{rule}: replay orders Gamma {rounded(res['replay_order_Gamma'])}, "
+              f"velocity {rounded(res['replay_order_velocity'])}, cost orders "
+              f"{rounded(res['cost_order'])}, extrapolated cost "
               f"{res['cost_richardson']:.7f}")
         for r in res["rows"]:
             dc = r["discrete_casimir_drift"]

@@ -9,25 +9,26 @@ met, and the paths of the two mirror-image minima of the fixed plate.
 
 from __future__ import annotations
 
-import sys
 import time
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-
-import matplotlib  # noqa: E402
+import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from _bench import arguments, order, progress, save  # noqa: E402
 from matplotlib.ticker import NullLocator  # noqa: E402
 
 import ocgroupoid as og  # noqa: E402
+from ocgroupoid.bench.record import write_summary  # noqa: E402
+from ocgroupoid.bench.reference import extrapolated  # noqa: E402
+from ocgroupoid.bench.script import arguments, rounded, steps  # noqa: E402
 from ocgroupoid.models.plate_ball import plate_ball  # noqa: E402
 from ocgroupoid.nlp import RawResult  # noqa: E402
 from ocgroupoid.solve import distinct_minima, make_solution  # noqa: E402
+from ocgroupoid.solve.richardson import observed_orders  # noqa: E402
 
+RESULTS = Path(__file__).resolve().parent.parent / "results"
 OMEGAS = (0.0, 1.0)
 
 
@@ -61,35 +62,33 @@ def row(sol: og.Solution, results: list[RawResult], seconds: float) -> dict:
 
 
 def main() -> None:
-    args = arguments(__doc__.splitlines()[0])
+    args = arguments(__doc__.splitlines()[0], RESULTS)
     Ns = [32, 64, 128] if args.quick else [32, 64, 128, 256, 512]
     rules = ["cayley", "first_order"] if args.quick else ["cayley", "exp", "first_order"]
     table: dict[str, dict[str, dict]] = {}
-    with progress() as bar:
-        task = bar.add_task("plate_ball", total=len(OMEGAS) * len(rules) * len(Ns))
+    with steps(len(OMEGAS) * len(rules) * len(Ns)) as step:
         for Om in OMEGAS:
             pb = plate_ball(Omega_p=Om)
             inst = table.setdefault(f"Omega_p={Om:g}", {})
             for rule in rules:
                 rows = []
                 for N in Ns:
-                    bar.update(task, description=f"Omega_p={Om:g} {rule} N={N}")
+                    step(f"Omega_p={Om:g} {rule} N={N}")
                     sol, results, seconds = run(pb, N, rule)
                     rows.append(row(sol, results, seconds))
                     if Om == 0.0 and rule == "cayley" and N == Ns[-1]:
                         tr = og.compile(pb, N=N).transcription
                         pair = [tr.unpack(r.x, r.p)["s"][:, :2] for m in sol.minima[:2]
                                 for r in results if r.label == m["label"]]
-                    bar.advance(task)
                 costs = [r["cost"] for r in rows]
                 inst[rule] = {"rows": rows,
-                              "replay_order": order([r["replay_error"] for r in rows]),
-                              "cost_order": order(list(np.abs(np.diff(costs)))),
-                              "cost_richardson": costs[-1] + (costs[-1] - costs[-2]) / 3}
+                              "replay_order": observed_orders([r["replay_error"]
+                                                               for r in rows]),
+                              "cost_order": observed_orders(np.abs(np.diff(costs)).tolist()),
+                              "cost_richardson": extrapolated(costs[-2], costs[-1], 2)}
     data = {"problem": "plate_ball", "T": 1.0, "Ns": Ns, "rules": rules, "instances": table,
-            "note": "2 cores shared with other jobs: times are indicative",
-            "created": time.strftime("%Y-%m-%d %H:%M:%S")}
-    path = save(args.out, "bench_plate_ball", data)
+            "note": "2 cores shared with other jobs: times are indicative"}
+    path = write_summary(args.out / "bench_plate_ball.json", data)
 
     fig, ax = plt.subplots(1, 4, figsize=(17, 4))
     styles = {"cayley": "o-", "exp": "^-", "first_order": "s--"}
@@ -123,8 +122,8 @@ def main() -> None:
 
     for inst, res in table.items():
         for rule, r in res.items():
-            print(f"{inst} {rule}: replay orders {np.round(r['replay_order'], 2).tolist()}, "
-                  f"cost orders {np.round(r['cost_order'], 2).tolist()}, "
+            print(f"{inst} {rule}: replay orders {rounded(r['replay_order'])}, "
+                  f"cost orders {rounded(r['cost_order'])}, "
                   f"extrapolated cost {r['cost_richardson']:.7f}")
             for x in r["rows"]:
                 print(f"   N={x['N']:4d} cost {x['cost']:.9f} replay {x['replay_error']:.3e} "

@@ -16,25 +16,26 @@ expanded to SX first, "casadi_ad_expand"). Their build time includes our stage p
 from __future__ import annotations
 
 import statistics
-import sys
 import time
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-
-import casadi as ca  # noqa: E402
-import matplotlib  # noqa: E402
-import numpy as np  # noqa: E402
+import casadi as ca
+import matplotlib
+import numpy as np
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-from _bench import arguments, median_time, progress, save  # noqa: E402
 
 import ocgroupoid as og  # noqa: E402
+from ocgroupoid.bench.record import write_summary  # noqa: E402
+from ocgroupoid.bench.script import arguments, steps  # noqa: E402
+from ocgroupoid.bench.timing import median_seconds  # noqa: E402
 from ocgroupoid.models.rigid_body import rigid_body  # noqa: E402
 from ocgroupoid.nlp.assembly import StageDerivatives, plain_nlp  # noqa: E402
 from ocgroupoid.nlp.transcription import Transcription, nlpsol_options  # noqa: E402
 from ocgroupoid.solve import geodesic_guesses  # noqa: E402
+
+RESULTS = Path(__file__).resolve().parent.parent / "results"
 
 
 def casadi_floor(tr: Transcription, repeats: int) -> dict[str, float]:
@@ -84,7 +85,7 @@ def baseline(tr: Transcription, extra: dict[str, object], x0: np.ndarray, p: np.
     nlp = plain_nlp(tr.blocks, ca.MX.sym("x", tr.nx), ca.MX.sym("p", tr.np))
     solver = ca.nlpsol("baseline", "ipopt", nlp, {**opts, **extra})
     build = tr.build_phases["stages"] + time.perf_counter() - t0
-    solve, r = median_time(lambda: solver(x0=x0, p=p, lbg=0, ubg=0), repeats)
+    solve, r = median_seconds(lambda: solver(x0=x0, p=p, lbg=0, ubg=0), repeats)
     stats = solver.stats()
     return {"build_seconds": build, "solve_seconds": solve, "cost": float(r["f"]),
             "iterations": int(stats["iter_count"]), "status": str(stats["return_status"])}
@@ -127,15 +128,14 @@ def plot(path: Path, Ns: list[int], rows: list[dict]) -> None:
 
 
 def main() -> None:
-    args = arguments(__doc__.splitlines()[0])
+    args = arguments(__doc__.splitlines()[0], RESULTS)
     Ns = [16, 32, 64] if args.quick else [16, 32, 64, 128, 256, 512, 1024]
     repeats = 3 if args.quick else 15
     pb = rigid_body()
     rows = []
-    with progress() as bar:
-        task = bar.add_task("so3_rest_to_rest", total=len(Ns))
+    with steps(len(Ns) * (2 + len(BASELINES))) as step:
         for N in Ns:
-            bar.update(task, description=f"N={N}: build")
+            step(f"N={N}: build")
             builds = [og.compile(pb, N=N).transcription for _ in range(1 if args.quick else 3)]
             build = statistics.median(b.build_seconds for b in builds)
             phases = {k: statistics.median(b.build_phases[k] for b in builds)
@@ -143,18 +143,17 @@ def main() -> None:
             tr = builds[-1]
             p = tr.pack()
             guess = geodesic_guesses(tr, p)[0]
-            bar.update(task, description=f"N={N}: solve x{repeats}")
-            solve, raw = median_time(lambda: tr.solve(guess, p), repeats)  # noqa: B023 (called here)
+            step(f"N={N}: solve x{repeats}")
+            solve, raw = median_seconds(lambda: tr.solve(guess, p), repeats)  # noqa: B023 (called here)
             floor = casadi_floor(tr, 3) if N in (Ns[0], Ns[-1]) else None
             base = {}
             for name, extra in BASELINES.items():
-                bar.update(task, description=f"N={N}: baseline {name}")
+                step(f"N={N}: baseline {name}")
                 base[name] = baseline(tr, extra, tr.point(guess, p), p, repeats)
             rows.append({"N": N, "build_seconds": build, "build_phases_seconds": phases,
                          "casadi_floor_seconds": floor, "solve_seconds": solve,
                          "iterations": raw.iterations, "status": raw.status, "cost": raw.cost,
                          "baselines": base})
-            bar.advance(task)
     by = {r["N"]: r for r in rows}
     ratios = {"build_1024_over_16": by[1024]["build_seconds"] / by[16]["build_seconds"]
               if 1024 in by else None,
@@ -177,9 +176,8 @@ def main() -> None:
         (first["build_seconds"] + floor_growth) / first["build_seconds"]
     data = {"problem": "so3_rest_to_rest", "retraction": "cayley", "repeats": repeats,
             "rows": rows, "ratios": ratios, "median_solve_ms_N64": by[64]["solve_seconds"] * 1e3,
-            "median_solve_ms_N512": by[512]["solve_seconds"] * 1e3 if 512 in by else None,
-            "created": time.strftime("%Y-%m-%d %H:%M:%S")}
-    path = save(args.out, "bench_so3", data)
+            "median_solve_ms_N512": by[512]["solve_seconds"] * 1e3 if 512 in by else None}
+    path = write_summary(args.out / "bench_so3.json", data)
     plot(args.out / "bench_so3.png", Ns, rows)
     for r in rows:
         ph = "/".join(f"{v * 1e3:.1f}" for v in r["build_phases_seconds"].values())

@@ -18,28 +18,27 @@ Writes results/bench_sweep.json and results/bench_sweep.png.
 from __future__ import annotations
 
 import importlib
-import sys
 import tempfile
 import time
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-
-import matplotlib  # noqa: E402
-import numpy as np  # noqa: E402
+import matplotlib
+import numpy as np
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-from _bench import arguments, progress, save  # noqa: E402
 
 import ocgroupoid as og  # noqa: E402
+from ocgroupoid.bench.record import write_summary  # noqa: E402
+from ocgroupoid.bench.script import arguments, steps  # noqa: E402
 from ocgroupoid.sweep.cluster import connect, cores  # noqa: E402
 from ocgroupoid.sweep.source import Source  # noqa: E402
 from ocgroupoid.sweep.spec import axes, points  # noqa: E402
 from ocgroupoid.sweep.structure import chunk_size, chunks, classify  # noqa: E402
 from ocgroupoid.sweep.task import Task, solve_chunk  # noqa: E402
 
-SO3 = Path(__file__).resolve().parent.parent / "problems" / "so3_rest_to_rest.yaml"
+ROOT = Path(__file__).resolve().parent.parent
+SO3 = ROOT / "problems" / "so3_rest_to_rest.yaml"
 INERTIAS = [[1, 2, 3], [2, 2, 3], [3, 2, 1], [1.5, 1, 2], [1, 1, 1], [2, 3, 4], [4, 1, 2],
             [1, 3, 1.5]]
 
@@ -82,33 +81,31 @@ def serial(spec: dict[str, str], sets: list[str], warm: str) -> tuple[list[dict]
 
 
 def main() -> None:
-    args = arguments(__doc__.splitlines()[0])
+    args = arguments(__doc__.splitlines()[0], ROOT / "results")
     spec, sets = grid(args.quick)
     n_workers = min(cores(), 2) if args.quick else cores()
     repeats = 1 if args.quick else 2
-    with progress() as bar:
-        task = bar.add_task("serial loop", total=2 * repeats + 1)
+    with steps(2 * repeats + 2) as step:
         serial_times, dask_times, runs, built = [], [], [], []
-        for _ in range(repeats):  # no cluster running: its scheduler would share this process
+        for r in range(repeats):  # no cluster running: its scheduler would share this process
+            step(f"serial loop ({r + 1}/{repeats})")
             cold, seconds = serial(spec, sets, "fallback")
             serial_times.append(seconds)
             built.append(sum(c["nlp_built"] for c in cold))
-            bar.update(task, advance=1)
-        bar.update(task, description="serial, warm starts first")
+        step("serial, warm starts first")
         warm, warm_seconds = serial(spec, sets, "first")
-        bar.update(task, advance=1, description=f"Dask: starting {n_workers} workers")
+        step(f"Dask: starting {n_workers} workers")
         t0 = time.perf_counter()
         with connect(workers=n_workers) as client, tempfile.TemporaryDirectory() as tmp:
             client.run(importlib.import_module, "ocgroupoid.sweep.task")  # as a sweep would
             startup = time.perf_counter() - t0
             cores_worth = capacity(client, n_workers)
             for r in range(repeats):
-                bar.update(task, description=f"Dask sweep ({r + 1}/{repeats})")
+                step(f"Dask sweep ({r + 1}/{repeats})")
                 t1 = time.perf_counter()
                 runs.append(og.sweep(SO3, spec, overrides=sets, client=client,
                                      out=Path(tmp) / f"s{r}"))
                 dask_times.append(time.perf_counter() - t1)
-                bar.update(task, advance=1)
     df = runs[0]  # the first: its workers built their NLPs (later runs reuse them)
     serial_seconds, dask_seconds = min(serial_times), min(dask_times)
     n = len(cold)
@@ -140,9 +137,8 @@ def main() -> None:
                        "iterations_cold": sum(r["iterations"] for r in cold)},
         "seconds_per_point_median": float(np.median([r["seconds"] for r in cold])),
         "solve_seconds_per_point_median": float(np.median([r["solve_seconds"] for r in cold])),
-        "created": time.strftime("%Y-%m-%d %H:%M:%S"),
     }
-    path = save(args.out, "bench_sweep", data)
+    path = write_summary(args.out / "bench_sweep.json", data)
     fig, ax = plt.subplots(1, 2, figsize=(10, 4))
     labels = ["serial\n(1 process)", f"Dask, {n_workers} workers\n(cluster running)",
               f"Dask, {n_workers} workers\n(with start-up)"]

@@ -14,25 +14,23 @@ both to DIR; ``--quick`` takes 10^4 steps (CI).
 
 from __future__ import annotations
 
-import argparse
-import sys
 import time
 from pathlib import Path
 from typing import Any
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-
-import matplotlib  # noqa: E402
-import numpy as np  # noqa: E402
+import matplotlib
+import numpy as np
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-from _bench import RESULTS, save  # noqa: E402
 
 import ocgroupoid as og  # noqa: E402
+from ocgroupoid.bench.record import write_summary  # noqa: E402
+from ocgroupoid.bench.script import arguments  # noqa: E402
 from ocgroupoid.models.heavy_top import GAMMA0, heavy_top  # noqa: E402
 from ocgroupoid.models.rigid_body import INERTIA, rigid_body  # noqa: E402
 
+RESULTS = Path(__file__).resolve().parent.parent / "results"
 H, STEPS, QUICK_STEPS = 0.1, 100_000, 10_000
 WINDOW = 100  # steps per plotted point (the maximum of |error| over them)
 RIGID_OMEGA0 = (0.1, 1.0, 0.1)  # rad/s, near the unstable middle axis: the body flips
@@ -127,11 +125,8 @@ def draw(path: Path, systems: list[tuple[str, og.Simulation, dict[str, Any], str
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", type=Path, default=None,
-                    help="folder for JSON and PNG (default: results/ and results/figures/)")
-    ap.add_argument("--quick", action="store_true", help=f"{QUICK_STEPS} steps (CI)")
-    args = ap.parse_args()
+    args = arguments(__doc__.splitlines()[0], None, "folder for JSON and PNG (default: "
+                     "results/ and results/figures/)", f"{QUICK_STEPS} steps (CI)")
     out = args.out or RESULTS
     figures = args.out or RESULTS / "figures"
     figures.mkdir(parents=True, exist_ok=True)
@@ -147,7 +142,7 @@ def main() -> None:
             "model": "heavy_top defaults (Ibar, J, mgl)", "Gamma0": list(GAMMA0),
             "Omega0": list(TOP_OMEGA0), "theta0": [0, 0], "dtheta0": [0, 0],
             "controls": "zero rotor torques", "casimir": "Pi . Gamma"}, unit=3)}
-    path = save(out, "energy_drift", data)
+    path = write_summary(out / "energy_drift.json", data)
     draw(figures / "energy_drift.png", [
         ("free rigid body, I = diag(1, 2, 3), Ω(0) = (0.1, 1, 0.1) rad/s", rigid, rigid_c,
          "| |IΩ|² − |IΩ(0)|² |  [kg² m⁴ s⁻²]"),

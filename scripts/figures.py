@@ -7,20 +7,18 @@ Writes results/figures/<name>.png (shown in the README) and results/figures/figu
 
 from __future__ import annotations
 
-import argparse
 import sys
 import time
 from pathlib import Path
 from typing import Any
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
+import ocgroupoid as og
+from ocgroupoid import files
+from ocgroupoid.bench.record import write_summary
+from ocgroupoid.bench.script import arguments, steps
 
-from _bench import RESULTS, progress, save  # noqa: E402
-
-import ocgroupoid as og  # noqa: E402
-from ocgroupoid import files  # noqa: E402
-
-PROBLEMS = Path(__file__).resolve().parent.parent / "problems"
+ROOT = Path(__file__).resolve().parent.parent
+PROBLEMS = ROOT / "problems"
 QUICK_N = 64  # the coarsest grid on which every problem file is verified (heavy top: 1%)
 
 
@@ -35,24 +33,20 @@ def solve_file(path: Path, quick: bool) -> og.Solution:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", type=Path, default=RESULTS / "figures", help="folder for the PNGs")
-    ap.add_argument("--quick", action="store_true", help=f"N = {QUICK_N} (CI)")
-    args = ap.parse_args()
+    args = arguments(__doc__.splitlines()[0], ROOT / "results" / "figures",
+                     "folder for the PNGs", f"N = {QUICK_N} (CI)")
     args.out.mkdir(parents=True, exist_ok=True)
     paths = sorted(PROBLEMS.glob("*.yaml"))
     rows: dict[str, Any] = {}
-    with progress() as bar:
-        task = bar.add_task("solving and plotting", total=len(paths))
+    with steps(len(paths)) as step:
         for path in paths:
-            bar.update(task, description=f"{path.stem}")
+            step(f"solving and plotting {path.stem}")
             t0 = time.perf_counter()
             sol = solve_file(path, args.quick)
             og.plot(sol, args.out / f"{path.stem}.png")
             rows[path.stem] = {"status": sol.status, "success": sol.success, "cost": sol.cost,
                                "N": sol.N, "T": sol.T, "seconds": time.perf_counter() - t0}
-            bar.advance(task)
-    save(args.out, "figures", {"quick": args.quick, "problems": rows})
+    write_summary(args.out / "figures.json", {"quick": args.quick, "problems": rows})
     failed = [name for name, r in rows.items() if not r["success"]]
     if failed:
         sys.exit(f"not solved: {', '.join(failed)}")

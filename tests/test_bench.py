@@ -13,10 +13,13 @@ from typer.testing import CliRunner
 import ocgroupoid as og
 from ocgroupoid import files
 from ocgroupoid.bench import workprecision
-from ocgroupoid.bench.equal_accuracy import compare, headline, time_at
+from ocgroupoid.bench.chart import work_precision_grid
+from ocgroupoid.bench.equal_accuracy import compare, headline, report, time_at
 from ocgroupoid.bench.record import read_rows
 from ocgroupoid.bench.stability import manoeuvre
+from ocgroupoid.bench.timing import median_seconds
 from ocgroupoid.cli import app
+from ocgroupoid.solve.richardson import observed_orders
 
 ROOT = Path(__file__).resolve().parent.parent
 SO3 = ROOT / "problems" / "so3_rest_to_rest.yaml"
@@ -46,6 +49,10 @@ def test_work_precision_writes_rows_summary_and_chart(tmp_path: Path) -> None:
         assert 0 < x["cost_error"] < 1e-1 and x["replay_error"] > 0 and x["seconds"] > 0
     assert (tmp_path / "figures" / "work_precision_so3_rest_to_rest.png").read_bytes()[:8] \
         == PNG
+    text = report(summary)  # what the command and scripts/bench_schemes.py print
+    assert "so3_rest_to_rest: reference J = " in text and "at equal cost error" in text
+    grid = work_precision_grid([summary, summary], tmp_path / "grid.png")
+    assert grid.read_bytes()[:8] == PNG
 
 
 def test_an_interrupted_run_keeps_its_finished_rows(tmp_path: Path, monkeypatch) -> None:
@@ -161,3 +168,15 @@ def test_time_at_equal_accuracy_is_read_on_the_log_log_line() -> None:
     t_ours = 0.1 * 4 ** (math.log(5) / math.log(100))
     assert math.isclose(found[1e-3]["ratio"], 4.0 / t_ours) and not found[1e-3]["lower_bound"]
     assert headline(list(found.values()), 1e-2)["level"] == 1e-3  # interpolated first
+
+
+def test_observed_orders_of_every_halving_and_none_without_a_rate() -> None:
+    orders = observed_orders([1.0, 0.25, 1 / 64, 0.0])
+    assert orders[:2] == [pytest.approx(2.0), pytest.approx(4.0)] and orders[2] is None
+
+
+def test_median_seconds_times_every_call_and_keeps_the_last_result() -> None:
+    calls = []
+    seconds, last = median_seconds(lambda: calls.append(1) or len(calls), 3)
+    assert last == 3 and seconds >= 0.0
+    assert median_seconds(lambda: "once", 0)[1] == "once"  # at least one call

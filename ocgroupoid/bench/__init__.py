@@ -8,6 +8,12 @@ and grids (:mod:`~ocgroupoid.bench.outcome`, :mod:`~ocgroupoid.bench.stability_c
 write a JSON line per solve as they go (:mod:`~ocgroupoid.bench.record`), then a summary JSON
 and a PNG.
 
+The scripts of ``scripts/`` are built on the same modules: their command line and progress
+bar (:mod:`~ocgroupoid.bench.script`), medians (:mod:`~ocgroupoid.bench.timing`), summaries
+with the machine (:mod:`~ocgroupoid.bench.record`), observed orders
+(:mod:`~ocgroupoid.solve.richardson`); ``scripts/bench_schemes.py`` runs the work-precision
+of every problem file.
+
 Nothing is imported here: the command line (:mod:`~ocgroupoid.bench.commands`) registers
 the ``bench`` group without loading the solvers, SciPy or matplotlib.
 """

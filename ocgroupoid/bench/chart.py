@@ -39,6 +39,14 @@ SHADES = {"order2": {"+jit": "navy", "@fatrop": "deepskyblue", "@fatrop+jit": "d
 VARIANT_MARKERS = {"+jit": "D", "@fatrop": "v", "@fatrop+jit": "*"}
 
 
+def save_png(fig: Any, path: Path, dpi: int) -> Path:
+    """Write a matplotlib figure as PNG atomically (a run cut short leaves no half file)."""
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=dpi)
+    write_atomic(path, buf.getvalue())
+    return path
+
+
 def style(method: str, i: int) -> tuple[str, str, str, str]:
     """Colour, line style, marker and legend name of a method's line (``i``: its place,
     for a method without a style of its own)."""
@@ -139,7 +147,27 @@ def work_precision_chart(summary: dict[str, Any], path: Path, dpi: int = 110) ->
             f"{ref['relative_uncertainty']:.1e}). Lower left is better.")
     fig.suptitle(_wrap(head, 150) + ("\n" + subtitle(summary) if subtitle(summary) else ""),
                  fontsize=9)
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=dpi)
-    write_atomic(path, buf.getvalue())
-    return path
+    return save_png(fig, path, dpi)
+
+
+def work_precision_grid(summaries: list[dict[str, Any]], path: Path, dpi: int = 100
+                        ) -> Path:
+    """Several work-precision summaries on one PNG: a row of the two panels (cost and
+    landing accuracy) per problem, without the reference band and subtitles of
+    :func:`work_precision_chart`."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(11, 3.4 * len(summaries)), layout="constrained")
+    axes = fig.subplots(len(summaries), 2, squeeze=False)
+    for row, summary in zip(axes, summaries):
+        by_method = lines(summary["rows"])
+        for ax, key, what in zip(row, ("cost_error", "replay_error"),
+                                 ("relative cost error", "replay terminal error")):
+            _panel(ax, by_method, key)
+            ax.set_xlabel("solver wall time per solve [s] (median)")
+            ax.set_ylabel(what)
+            ax.set_title(f"{summary['problem']}: {what} against time", fontsize=9)
+            ax.grid(alpha=0.3, which="both")
+            ax.legend(fontsize=7)
+    fig.suptitle("Work-precision: lower left is better")
+    return save_png(fig, path, dpi)

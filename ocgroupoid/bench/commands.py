@@ -77,6 +77,7 @@ def work_precision_command(
     from ..errors import ConfigError
     from ..progress import progress_bar
     from ..solve.outputs import check_folder
+    from .equal_accuracy import report
     from .methods import WORK_PRECISION, parse_grids, parse_methods
     from .workprecision import DEFAULT_NS, outputs, work_precision
 
@@ -92,19 +93,8 @@ def work_precision_command(
             summary, where = work_precision(file, set_, out_dir, methods, Ns, repeats,
                                             reference_N, name, bar)
     if not quiet:
-        out.print(_ratios(summary))
+        out.print(report(summary))
         out.print(f"rows {where.rows}, summary {where.summary}, chart {where.chart}")
-
-
-def _ratios(summary: dict) -> str:
-    """One line per error kind: rk4_quat's time over our fastest, at each common level."""
-    lines = [f"{summary['problem']}: reference J = {summary['reference']['cost']:.12g} "
-             f"(relative uncertainty {summary['reference']['relative_uncertainty']:.1e})"]
-    for key, rows in summary["equal_accuracy"].items():
-        lines.append(f"  time of rk4_quat / ours at equal {key.replace('_', ' ')}: " + (
-            ", ".join(f"{r['level']:.0e}: {'>=' if r['lower_bound'] else ''}{r['ratio']:.2g}x "
-                      f"({r['ours']})" for r in rows) or "no common error level"))
-    return "\n".join(lines)
 
 
 @bench.command("stability")

@@ -96,3 +96,16 @@ def headline(comparisons: list[dict[str, Any]], preferred: float) -> dict[str, A
         return None
     return min(comparisons, key=lambda c: (c["lower_bound"],
                                            abs(math.log10(c["level"] / preferred))))
+
+
+def report(summary: dict[str, Any]) -> str:
+    """The reference of a work-precision summary, then one line per error kind: rk4_quat's
+    time over our fastest at each common level (as ``ocgroupoid bench`` prints it)."""
+    ref = summary["reference"]
+    text = [f"{summary['problem']}: reference J = {ref['cost']:.12g} (relative uncertainty "
+            f"{ref['relative_uncertainty']:.1e})"]
+    for key, rows in summary["equal_accuracy"].items():
+        text.append(f"  time of rk4_quat / ours at equal {key.replace('_', ' ')}: " + (
+            ", ".join(f"{r['level']:.0e}: {'>=' if r['lower_bound'] else ''}{r['ratio']:.2g}x "
+                      f"({r['ours']})" for r in rows) or "no common error level"))
+    return "\n".join(text)

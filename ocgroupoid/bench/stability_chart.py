@@ -6,15 +6,13 @@ the slew turns the other way round)."""
 
 from __future__ import annotations
 
-import io
 import math
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ..solve.solution import write_atomic
-from .chart import NAMES
+from .chart import NAMES, save_png
 from .outcome import OUTCOMES
 
 COLOURS = {"converged": "#4daf4a", "unverified": "#d9ef8b", "off group": "#b07cc6",
@@ -90,7 +88,4 @@ def stability_chart(summary: dict[str, Any], path: Path, dpi: int = 110) -> Path
     fig.suptitle(f"{summary['problem']}: rest-to-rest slews of {s['state']} about ({axis}), "
                  f"from {s['start']}. Dotted: pi/2 (Euler pitch 90 deg), pi (beyond it the "
                  "slew turns the other way round)", fontsize=9)
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=dpi)
-    write_atomic(path, buf.getvalue())
-    return path
+    return save_png(fig, path, dpi)

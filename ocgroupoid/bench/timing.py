@@ -13,7 +13,7 @@ from __future__ import annotations
 import statistics
 import time
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Callable, TypeVar
 
 from ..model.problem import Problem
 from ..nlp.transcription import Guess
@@ -22,6 +22,7 @@ from .methods import Method
 
 MIN_SECONDS = 0.25  # a solve faster than this is repeated until the repeats add up to it,
 MAX_REPEATS = 15  # at most this often: medians of milliseconds are noisy
+Result = TypeVar("Result")
 
 
 @dataclass(frozen=True)
@@ -45,6 +46,17 @@ class Timed:
     @property
     def median(self) -> float:
         return statistics.median(self.seconds)
+
+
+def median_seconds(fn: Callable[[], Result], repeats: int) -> tuple[float, Result]:
+    """The median wall time of ``repeats`` calls of ``fn()`` (at least one), and the last
+    call's result."""
+    times = []
+    for _ in range(max(1, repeats)):
+        t0 = time.perf_counter()
+        result = fn()
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times), result
 
 
 def cold_start(solver_guesses: list[Guess], start: str | None) -> Guess:

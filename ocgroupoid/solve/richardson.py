@@ -14,6 +14,7 @@ order q observed.
 from __future__ import annotations
 
 import math
+from itertools import pairwise
 from typing import Any
 
 
@@ -32,6 +33,12 @@ def observed_order(coarse_error: float, fine_error: float, ratio: float = 2.0
             and math.isfinite(fine_error)):
         return None
     return math.log(coarse_error / fine_error, ratio)
+
+
+def observed_orders(errors: list[float], ratio: float = 2.0) -> list[float | None]:
+    """:func:`observed_order` of every pair of neighbours in ``errors``, measured on grids
+    each ``ratio`` times finer than the last (one fewer than the errors)."""
+    return [observed_order(coarse, fine, ratio) for coarse, fine in pairwise(errors)]
 
 
 def relative(error: float, value: float) -> float:

@@ -1,0 +1,53 @@
+"""What the benchmark scripts (``scripts/``) share: their command line, a progress bar and
+the rounding of the orders they print.
+
+Every script takes ``--out`` (where its JSON and PNG go) and ``--quick`` (small sizes and
+few repeats, for the tests); it writes its JSON with
+:func:`~ocgroupoid.bench.record.write_summary` (the machine and the date added) and reports
+each step as it starts on the bar of :mod:`ocgroupoid.progress` (on stderr).
+"""
+
+from __future__ import annotations
+
+import argparse
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Callable, Iterator
+
+from rich.console import Console
+
+from ..progress import progress_bar
+
+#: hears the description of every step as it starts
+Step = Callable[[str], None]
+
+
+def arguments(description: str, out: Path | None,
+              out_help: str = "folder for JSON and PNG",
+              quick_help: str = "small sizes and few repeats (CI)") -> argparse.Namespace:
+    """``--out`` (default ``out``) and ``--quick``, parsed from the command line."""
+    ap = argparse.ArgumentParser(description=description)
+    ap.add_argument("--out", type=Path, default=out, help=out_help)
+    ap.add_argument("--quick", action="store_true", help=quick_help)
+    return ap.parse_args()
+
+
+@contextmanager
+def steps(total: int) -> Iterator[Step]:
+    """A bar over ``total`` steps on stderr: call the step with its description as each one
+    starts; the bar is full when the block ends."""
+    with progress_bar(Console(stderr=True)) as update:
+        done = 0
+
+        def step(description: str) -> None:
+            nonlocal done
+            update(description, done, total)
+            done += 1
+
+        yield step
+        update("done", total, total)
+
+
+def rounded(values: list[float | None], digits: int = 2) -> list[float | None]:
+    """``values`` rounded for printing (None, e.g. an order with no rate to observe, kept)."""
+    return [None if v is None else round(v, digits) for v in values]
