@@ -100,6 +100,10 @@ class RealTimeIteration:
                                      [hess, grad, jac[order, :], g[order]],
                                      ["z", "p", "lam_g"], ["H", "g", "A", "c"])
         structure = {"N": sf.K, "nx": sf.nx, "nu": sf.nu, "ng": sf.ng}
+        if sf.nu[-1]:  # CasADi's HPIPM interface has no controls at the last stage: one more
+            # stage without variables or rows takes that place (the same QP)
+            structure = {"N": sf.K + 1, "nx": [*sf.nx, 0], "nu": [*sf.nu, 0],
+                         "ng": [*sf.ng, 0]}
         options: dict[str, Any] = {**structure, "print_time": False, "error_on_fail": False}
         if qp == "hpipm":
             options["hpipm"] = dict(HPIPM)
