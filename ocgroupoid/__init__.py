@@ -28,6 +28,7 @@ from .export import export_c
 from .groupoid import Groupoid, LieGroupFactor, Pair, SphereAction
 from .lie import SE2, SE3, SO3, se2, se3, so3
 from .model import GuessContext, Problem
+from .mpc import MpcResult, mpc
 from .nlp import Discretization, Guess, Transcription
 from .plotting import plot, view  # registers Solution.plot; matplotlib loads on use
 from .solve import Solution, Solver, compile, solve, solve_to_accuracy
@@ -41,5 +42,5 @@ __all__ = [
     "Solution", "OcgError", "ConfigError", "DimensionError", "SingularityError",
     "BoundaryError", "TranscriptionError", "SolverError", "export_c", "sweep", "__version__",
     "SO3", "SE3", "SE2", "se3", "se2", "plot", "view",
-    "simulate", "Simulation",
+    "simulate", "Simulation", "mpc", "MpcResult",
 ]

@@ -21,6 +21,7 @@ from rich.table import Table
 from ._startup import interrupt_exit_code, terminated
 from .bench.commands import bench
 from .errors import ConfigError, OcgError
+from .mpc.command import mpc_command
 
 app = typer.Typer(no_args_is_help=True, add_completion=False, pretty_exceptions_enable=False,
                   help="Optimal control on Lie groups and groupoids: solve YAML problem files.")
@@ -28,6 +29,7 @@ out = Console()
 err = Console(stderr=True, soft_wrap=True)
 
 app.add_typer(bench, name="bench")  # ocgroupoid bench work-precision | stability
+app.command("mpc")(mpc_command)  # ocgroupoid mpc FILE --steps K: closed loop (ocgroupoid.mpc)
 SET_HELP = "Override any key: KEY=VALUE, the value read as YAML (e.g. horizon.N=128)."
 LONG_SOLVE = 10.0  # seconds: a solve estimated longer is announced with its estimate
 
