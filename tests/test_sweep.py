@@ -112,7 +112,10 @@ def test_grid_forms() -> None:
     assert axis("horizon.T", "2.5:9:1").values == (2.5,)
     assert axis("final.R", "[{rotvec: [0, 0, 1]}, identity]").values == (
         {"rotvec": [0, 0, 1]}, "identity")
-    assert axes(["horizon.T=[1.0e-3, 2]"])[0].values == (1e-3, 2)  # YAML: 1e-3 is a string
+    assert axes(["horizon.T=[1.0e-3, 2]"])[0].values == (1e-3, 2)
+    # numbers as everybody writes them (YAML 1.1 would read 1e-6 and 1E-8 as text)
+    assert axes(["solver.accuracy=[1e-6, 1E-8, .5]"])[0].values == (1e-6, 1e-8, 0.5)
+    assert axes(["horizon.T=1e-1:2E-1:2"])[0].values == (0.1, 0.2)
     assert [a.key for a in axes({"a.b": [1], "c": "0:1:2"})] == ["a.b", "c"]
 
 
