@@ -62,7 +62,9 @@ def test_python_m_solves_the_canonical_problem(tmp_path) -> None:
     assert sol["success"] and sol["N"] == 32 and sol["T"] == 5.0
     assert {"problem", "status", "cost", "stats", "controls", "states", "multipliers",
             "diagnostics"} <= set(sol)
-    assert len(sol["controls"]["t"]) == len(sol["controls"]["u"]) == 33
+    # the default scheme (order4): the control at the nodes and at both Gauss points
+    assert sol["discretization"]["scheme"] == "order4"
+    assert len(sol["controls"]["t"]) == len(sol["controls"]["u"]) == 3 * 32 + 1
 
 
 def test_resolve_with_changed_inertia_matches_the_api(tmp_path) -> None:

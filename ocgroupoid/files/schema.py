@@ -19,6 +19,9 @@ from ..nlp.transcription import BACKENDS, DEFAULT_BACKEND, MAX_SECONDS
 from ..solve.auto import ACCURACY_MAX, N_MAX, N_MIN
 
 
+#: the scheme of a problem file that names none (with a fixed N): order4 lands within 1e-6
+#: of the distance at the files' N where order2 needs 4N or more (scripts/bench_default_scheme.py)
+FILE_SCHEME = "order4"
 #: perturbed starts of ``solver.multistart`` (each is a full IPOPT solve) and coarse grids
 #: of ``solver.continuation``
 MULTISTART_MAX = 1000
@@ -163,8 +166,9 @@ class DiscretizationSection(Strict):
     """Scheme, retraction of the group factors and rule of the constraints."""
 
     scheme: Literal[(*SCHEME_NAMES, "auto")] = Field(  # type: ignore[valid-type]
-        "order2", description="discretisation scheme (ocgroupoid list shows them), or auto "
-        "(with horizon.N: auto): whichever meets the accuracy with less IPOPT time")
+        FILE_SCHEME, description="discretisation scheme (ocgroupoid list shows them), or auto "
+        "(with horizon.N: auto): whichever meets the accuracy with less IPOPT time; when the "
+        f"file names none: {FILE_SCHEME} with a fixed N, auto with N: auto")
     retraction: Literal[RETRACTION_NAMES] = Field(  # type: ignore[valid-type]
         "cayley", description="cayley (default), exp, or first_order (the seeds' rule)")
     rule: str = Field("midpoint", description="discretisation rule of the constraints")
@@ -215,6 +219,22 @@ class OutputSection(Strict):
 
 class ProblemFile(Strict):
     """The top level of a problem file."""
+
+    @model_validator(mode="before")
+    @classmethod
+    def _default_scheme(cls, data: Any) -> Any:
+        """A file that names no scheme gets the one measured fastest at the accuracy users
+        ask (:data:`FILE_SCHEME`; ``scripts/bench_default_scheme.py``), and with
+        ``horizon.N: auto`` the choice between the schemes too."""
+        if not isinstance(data, dict) or not isinstance(data.get("discretization", {}), dict):
+            return data
+        section = dict(data.get("discretization") or {})
+        if "scheme" in section:
+            return data
+        horizon = data.get("horizon")
+        auto = isinstance(horizon, dict) and horizon.get("N") == "auto"
+        section["scheme"] = "auto" if auto else FILE_SCHEME
+        return {**data, "discretization": section}
 
     model: str = Field(description="a built-in model (see `ocgroupoid list`) or custom")
     name: str | None = Field(None, description="problem name (default: the file's stem)")

@@ -1,0 +1,77 @@
+"""Which scheme a problem file gets by default: order2 against order4, one run.
+
+For every problem file that does not name its scheme, both schemes solve it at the file's N
+and order2 also at 2N and 4N (one start each, the file's other settings). Printed per run:
+the replay's landing error relative to the distance the plan covers (the quantity
+"verified" bounds, ``solve/verdict.py``), the solver time of the start, and whether the
+solution is verified. Writes ``results/bench_default_scheme.json``.
+
+    python scripts/bench_default_scheme.py [FILE ...]
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+from rich.console import Console
+from rich.table import Table
+
+from ocgroupoid import files
+from ocgroupoid.solve import compile as compile_problem
+
+ROOT = Path(__file__).resolve().parents[1]
+OUT = ROOT / "results" / "bench_default_scheme.json"
+
+
+def landing(sol) -> float:
+    """The replay's terminal error over the distance covered, the largest over states."""
+    verdict = sol.diagnostics["verdict"]
+    share = verdict["replay_tolerance"]
+    errors = sol.diagnostics["replay"]["terminal_error"]
+    return max(err / (verdict["tolerances"]["landing"][key] / share)
+               for key, err in errors.items())
+
+
+def run(path: Path, scheme: str, N: int) -> dict:
+    """Solve ``path`` with ``scheme`` on N intervals from one start."""
+    cfg = files.load(path, [f"discretization.scheme={scheme}", f"horizon.N={N}"])
+    f, d = cfg.file, cfg.file.discretization
+    solver = compile_problem(files.build(cfg), N, d.retraction, d.rule, f.solver.ipopt,
+                             scheme, d.steps, f.solver.jit, f.solver.backend,
+                             f.solver.max_seconds, bound_points=d.bound_points)
+    sol = solver.solve(multistart=False)
+    return {"file": path.name, "scheme": scheme, "N": N, "landing": landing(sol),
+            "solver_seconds": sol.solve_seconds, "verified": bool(sol.success),
+            "cost": sol.cost}
+
+
+def unnamed(paths: list[Path]) -> list[Path]:
+    """The files that leave the scheme to the default."""
+    return [p for p in paths
+            if "scheme" not in files.load(p).raw.get("discretization", {})]
+
+
+def main(argv: list[str]) -> None:
+    paths = [Path(a) for a in argv] or sorted((ROOT / "problems").glob("*.yaml"))
+    console = Console()
+    rows = []
+    for path in unnamed(paths):
+        N = files.load(path).file.horizon.N
+        for scheme, n in (("order4", N), ("order2", N), ("order2", 2 * N), ("order2", 4 * N)):
+            console.print(f"{path.name}: {scheme} N={n} ...", highlight=False)
+            rows.append(run(path, scheme, n))
+    table = Table(title="default scheme: landing error (relative) and solver time, one start")
+    for col in ("file", "scheme", "N", "landing", "solver s", "verified"):
+        table.add_column(col)
+    for r in rows:
+        table.add_row(r["file"], r["scheme"], str(r["N"]), f"{r['landing']:.2e}",
+                      f"{r['solver_seconds']:.3f}", str(r["verified"]))
+    console.print(table)
+    OUT.parent.mkdir(exist_ok=True)
+    OUT.write_text(json.dumps(rows, indent=1))
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
