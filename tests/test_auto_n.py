@@ -114,10 +114,28 @@ def test_scheme_auto_keeps_the_scheme_that_needs_less_IPOPT_time(tmp_path) -> No
         assert row in text, text
 
 
+#: a slew unlike the file's (axis, angle, inertia), as the held-out instances are
+HELD_OUT = ["final.R={axis_angle: {axis: [-2, 1, 0.5], angle: 2.0}}",
+            "parameters.inertia=[1.5, 0.9, 2.2]"]
+
+
+def test_what_everybody_types_meets_the_target(tmp_path) -> None:
+    """``--set solver.accuracy=1e-6 --set horizon.N=auto`` and nothing else (issue 29): the
+    number as written, the scheme chosen too, the target met against a fine reference."""
+    overrides = [*HELD_OUT, "solver.accuracy=1e-6", "horizon.N=auto", NO_MULTISTART]
+    sol, _, _ = solve_file(tmp_path, "so3_rest_to_rest", *overrides)
+    report = sol.diagnostics["accuracy"]
+    assert sol.success and report["met"], report["message"]
+    assert set(report["schemes"]) == {"order2", "order4"}  # N: auto chose the scheme
+    J = reference("so3_rest_to_rest", overrides, sol, 128, 1e-6)
+    assert relative(abs(sol.cost - J), J) <= 1e-6
+
+
 def test_replay_accuracy_stops_at_the_first_grid_whose_replay_lands_within_it(tmp_path
                                                                               ) -> None:
     sol, _, _ = solve_file(tmp_path, "so3_rest_to_rest", "horizon.N=auto",
-                           "solver.replay_accuracy=1.0e-3", NO_MULTISTART)
+                           "solver.replay_accuracy=1.0e-3", NO_MULTISTART,
+                           "discretization.scheme=order2")  # order4 lands at the first grid
     assert sol.success
     assert sol.diagnostics["replay"]["max_terminal_error"] <= 1e-3
     coarser = [lv for lv in sol.diagnostics["accuracy"]["levels"] if lv["N"] < sol.N]
@@ -128,7 +146,8 @@ def test_an_unreachable_target_stops_at_N_max_with_the_best_estimate_and_a_fix(t
                                                                               ) -> None:
     r = runner.invoke(app, ["solve", str(PROBLEMS / "so3_rest_to_rest.yaml"), "-q",
                             "--set", "horizon.N=auto", "--set", "horizon.N_max=32",
-                            "--set", "solver.accuracy=1.0e-9", "--set", NO_MULTISTART])
+                            "--set", "solver.accuracy=1.0e-9", "--set", NO_MULTISTART,
+                            "--set", "discretization.scheme=order2"])
     assert r.exit_code == 1, r.output
     text = " ".join(r.output.split())
     for part in ("accuracy not reached", "N_max = 32 reached", "the best estimate reached is "

@@ -49,9 +49,8 @@ def test_every_problem_file_checks_and_solves(problem: Path, tmp_path) -> None:
 
 def test_python_m_solves_the_canonical_problem(tmp_path) -> None:
     out = tmp_path / "sol.json"
-    r = subprocess.run([sys.executable, "-m", "ocgroupoid", "solve", str(SO3), "--set",
-                        "horizon.N=32", "--out", str(out)], capture_output=True, text=True,
-                       cwd=tmp_path)
+    r = subprocess.run([sys.executable, "-m", "ocgroupoid", "solve", str(SO3), "--out",
+                        str(out)], capture_output=True, text=True, cwd=tmp_path)
     assert r.returncode == 0, r.stderr
     for word in ("Solve_Succeeded", "cost", "iterations", "build time",
                  "solver time, this solution", "(ipopt)", "solver time, every run",
@@ -59,10 +58,14 @@ def test_python_m_solves_the_canonical_problem(tmp_path) -> None:
                  "EL residual", "replay terminal error"):
         assert word in r.stdout
     sol = json.loads(out.read_text())
-    assert sol["success"] and sol["N"] == 32 and sol["T"] == 5.0
+    assert sol["success"] and sol["N"] == 64 and sol["T"] == 5.0
     assert {"problem", "status", "cost", "stats", "controls", "states", "multipliers",
             "diagnostics"} <= set(sol)
-    assert len(sol["controls"]["t"]) == len(sol["controls"]["u"]) == 33
+    # the default scheme (order4): the control at the nodes and at both Gauss points
+    assert sol["discretization"]["scheme"] == "order4"
+    assert len(sol["controls"]["t"]) == len(sol["controls"]["u"]) == 3 * 64 + 1
+    # the first solve of a fresh clone lands within 1e-6 rad (issue 29; order2 missed by 7e-4)
+    assert sol["diagnostics"]["replay"]["max_terminal_error"] <= 1e-6
 
 
 def test_resolve_with_changed_inertia_matches_the_api(tmp_path) -> None:
@@ -78,7 +81,7 @@ def test_resolve_with_changed_inertia_matches_the_api(tmp_path) -> None:
     assert changed["N"] == 24 and changed["parameters"]["inertia"] == [2.0, 1.5, 0.8]
     target = og.so3.from_rotvec([0.5, -0.4, 1.0])
     assert np.allclose(changed["states"]["R"][-1], target, atol=1e-9)
-    api = og.solve(rigid_body(inertia=[2.0, 1.5, 0.8], RT=target), N=24).cost
+    api = og.solve(rigid_body(inertia=[2.0, 1.5, 0.8], RT=target), N=24, scheme="order4").cost
     assert abs(changed["cost"] - api) <= 1e-10 * api
     assert abs(changed["cost"] - costs["default"]["cost"]) > 1e-3 * changed["cost"]
 
@@ -88,7 +91,7 @@ def test_infeasible_problem_exits_1_and_writes_failure(tmp_path) -> None:
     f.write_text(INFEASIBLE)
     out = tmp_path / "sol.json"
     r = runner.invoke(app, ["solve", str(f), "--out", str(out), "--set",
-                            "solver.multistart=false"])
+                            "solver.multistart=false", "--set", "discretization.scheme=order2"])
     assert r.exit_code == 1
     text = " ".join(r.output.split())
     assert "Infeasible_Problem_Detected" in text and "ocgroupoid check" in text

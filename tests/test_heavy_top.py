@@ -199,7 +199,8 @@ def test_multistart_rotor_guesses_beat_the_natural_guess() -> None:
 
 def test_shipped_file_finds_the_lowest_minimum(runs, tmp_path) -> None:
     out = tmp_path / "sol.json"
-    result = CliRunner().invoke(app, ["solve", str(SHIPPED), "--out", str(out)])
+    result = CliRunner().invoke(app, ["solve", str(SHIPPED), "--out", str(out), "--set",
+                                      "discretization.scheme=order2"])  # as the API runs
     assert result.exit_code == 0, result.output
     assert "Solve_Succeeded" in result.output and "Pi.Gamma" in result.output
     sol = og.Solution.from_json(out)
@@ -277,7 +278,8 @@ def test_a_diverging_solve_fails_fast_with_a_hint(tmp_path) -> None:
     (no replay of garbage controls), exits 1, writes success: false, and says what to try."""
     out = tmp_path / "sol.json"
     result = CliRunner().invoke(app, ["solve", str(SHIPPED), "--set", "horizon.N=8", "--set",
-                                      "solver.multistart=false", "--out", str(out)])
+                                      "solver.multistart=false", "--set",
+                                      "discretization.scheme=order2", "--out", str(out)])
     assert result.exit_code == 1, result.output
     sol = og.Solution.from_json(out)
     assert not sol.success and sol.status == "Diverging_Iterates"

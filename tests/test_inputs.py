@@ -140,11 +140,31 @@ def test_duplicate_keys_are_refused(tmp_path) -> None:
             f"{line_of(text, 'N: 32')}", "keep one of them")
 
 
-@pytest.mark.parametrize("written, spelled", [("1.0e300", "1.0e+300"), ("1e300", "1.0e+300"),
-                                              ("25E7", "25.0e+7")])
-def test_exponent_yaml_reads_as_text_names_the_spelling(tmp_path, written, spelled) -> None:
-    text = SO3.replace("T: 5.0", f"T: {written}")
-    refused(tmp_path, text, f"p.yaml:{line_of(text, 'T:')}", "read as text", f"write {spelled}")
+@pytest.mark.parametrize("written, value", [("5e0", 5.0), ("5E0", 5.0), (".5e1", 5.0),
+                                            ("50e-1", 5.0), ("5.0", 5.0), ("+5e+0", 5.0)])
+def test_numbers_are_numbers_however_written(tmp_path, written, value) -> None:
+    """``1e-6`` is a number, as everybody writes it (YAML 1.1 would read it as text)."""
+    path = tmp_path / "p.yaml"
+    path.write_text(SO3.replace("T: 5.0", f"T: {written}"))
+    T = files.load(path).file.horizon.T
+    assert isinstance(T, float) and T == value
+
+
+@pytest.mark.parametrize("where", ["file", "--set"])
+@pytest.mark.parametrize("written", ["1e-6", "1E-6", "1.0e-6", ".1e-5"])
+def test_accuracy_written_as_everybody_writes_it(tmp_path, where, written) -> None:
+    path = tmp_path / "p.yaml"
+    text = SO3.replace("N: 16", "N: auto")
+    if where == "file":
+        text = text.replace("solver:\n", f"solver:\n  accuracy: {written}\n")
+    path.write_text(text)
+    overrides = [f"solver.accuracy={written}"] if where == "--set" else []
+    assert files.load(path, overrides).file.solver.accuracy == 1e-6
+
+
+@pytest.mark.parametrize("written", ["yes", "on", "true"])
+def test_yaml_booleans_stay_refused_where_a_number_is_expected(tmp_path, written) -> None:
+    refused(tmp_path, SO3.replace("T: 5.0", f"T: {written}"), "horizon.T")
 
 
 @pytest.mark.parametrize("value, expected", [

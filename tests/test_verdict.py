@@ -27,6 +27,10 @@ PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
 WHEELS = PROBLEMS / "reaction_wheels.yaml"
 
 
+#: the scheme these checks of the verdict were written against (files default to order4)
+ORDER2 = ("discretization.scheme=order2",)
+
+
 def solve_file(path: Path, *sets: str, **kwargs) -> og.Solution:
     cfg = files.load(path, list(sets))
     d = cfg.file.discretization
@@ -69,9 +73,10 @@ def test_underactuated_slew_has_implied_final_components() -> None:
 
 @pytest.mark.parametrize("path", sorted(PROBLEMS.glob("*.yaml")), ids=lambda p: p.stem)
 def test_wildly_under_resolved_grid_is_not_a_clean_success(path: Path) -> None:
-    """N = 2 (one or two steps for the whole motion): never a clean success; where IPOPT
-    solves, the hint names the cause and a finer grid."""
-    sol = solve_file(path, "horizon.N=2", "solver.continuation=[]", multistart=False)
+    """N = 2 (one or two steps for the whole motion) with order2: never a clean success;
+    where IPOPT solves, the hint names the cause and a finer grid. (order4 may land within the
+    tolerance even there: so3_minimum_time at N = 2 misses by 0.6% of the distance.)"""
+    sol = solve_file(path, "horizon.N=2", "solver.continuation=[]", *ORDER2, multistart=False)
     assert not sol.success, (sol.status, sol.diagnostics.get("replay"))
     assert sol.hint
     if sol.status == "Solve_Succeeded":
@@ -84,7 +89,7 @@ def test_wildly_under_resolved_grid_is_not_a_clean_success(path: Path) -> None:
 ], ids=["extreme inertia", "2 rad per step"])
 def test_extreme_instances_are_not_clean_successes(sets: tuple[str, ...]) -> None:
     """Issue 19, item 4: these reported Solve_Succeeded while the plan missed by radians."""
-    sol = solve_file(PROBLEMS / "so3_rest_to_rest.yaml", *sets, multistart=False)
+    sol = solve_file(PROBLEMS / "so3_rest_to_rest.yaml", *sets, *ORDER2, multistart=False)
     assert not sol.success
     assert "does not land" in sol.hint and "increase N to" in sol.hint
 
@@ -97,9 +102,10 @@ def test_a_resolved_grid_lands_within_the_tolerance() -> None:
 
 
 def test_a_tighter_replay_tolerance_fails_a_coarse_grid() -> None:
-    loose = solve_file(PROBLEMS / "so3_rest_to_rest.yaml", "horizon.N=16", multistart=False)
-    tight = solve_file(PROBLEMS / "so3_rest_to_rest.yaml", "horizon.N=16", multistart=False,
-                       replay_tolerance=1e-4)
+    loose = solve_file(PROBLEMS / "so3_rest_to_rest.yaml", "horizon.N=16", *ORDER2,
+                       multistart=False)
+    tight = solve_file(PROBLEMS / "so3_rest_to_rest.yaml", "horizon.N=16", *ORDER2,
+                       multistart=False, replay_tolerance=1e-4)
     assert loose.success and not tight.success and "does not land" in tight.hint
 
 

@@ -14,10 +14,15 @@ from pydantic_core import PydanticCustomError
 from ..lie.retraction import RETRACTION_NAMES
 from ..model.ranges import T_RANGE, TIME_RANGE
 from ..model.values import Strict, number, positive
-from ..nlp.schemes import SCHEME_NAMES
+from ..nlp.schemes import DEFAULT_RULE, SCHEME_NAMES
 from ..nlp.transcription import BACKENDS, DEFAULT_BACKEND, MAX_SECONDS
 from ..solve.auto import ACCURACY_MAX, N_MAX, N_MIN
 
+#: the scheme of a problem file that names none (with a fixed N): order4 lands within 1e-6
+#: of the distance at the files' N where order2 needs 4N or more (scripts/bench_default_scheme.py)
+FILE_SCHEME = "order4"
+#: the seeds' retraction, which only order2 honours (order4 steps with exp)
+ORDER2_RETRACTION = "first_order"
 #: perturbed starts of ``solver.multistart`` (each is a full IPOPT solve) and coarse grids
 #: of ``solver.continuation``
 MULTISTART_MAX = 1000
@@ -163,8 +168,10 @@ class DiscretizationSection(Strict):
     """Scheme, retraction of the group factors and rule of the constraints."""
 
     scheme: Literal[SCHEME_NAMES + ("auto",)] = Field(  # type: ignore[valid-type]
-        "order2", description="discretisation scheme (ocgroupoid list shows them), or auto "
-        "(with horizon.N: auto): whichever meets the accuracy with less IPOPT time")
+        FILE_SCHEME, description="discretisation scheme (ocgroupoid list shows them), or auto "
+        "(with horizon.N: auto): whichever meets the accuracy with less IPOPT time; when the "
+        f"file names none: {FILE_SCHEME} with a fixed N, auto with N: auto, order2 where the "
+        "file asks for the first_order retraction or a rule other than midpoint")
     retraction: Literal[RETRACTION_NAMES] = Field(  # type: ignore[valid-type]
         "cayley", description="cayley (default), exp, or first_order (the seeds' rule)")
     rule: str = Field("midpoint", description="discretisation rule of the constraints")
@@ -215,6 +222,28 @@ class OutputSection(Strict):
 
 class ProblemFile(Strict):
     """The top level of a problem file."""
+
+    @model_validator(mode="before")
+    @classmethod
+    def _default_scheme(cls, data: Any) -> Any:
+        """A file that names no scheme gets the one measured fastest at the accuracy users
+        ask (:data:`FILE_SCHEME`; ``scripts/bench_default_scheme.py``), and with
+        ``horizon.N: auto`` the choice between the schemes too; a file asking for what only
+        order2 does (the seeds' first-order retraction, a rule of the constraints other than
+        midpoint: order4 steps with exp and imposes them at its Gauss points) gets order2."""
+        if not isinstance(data, dict) or not isinstance(data.get("discretization", {}), dict):
+            return data
+        section = dict(data.get("discretization") or {})
+        if "scheme" in section:
+            return data
+        horizon = data.get("horizon")
+        auto = isinstance(horizon, dict) and horizon.get("N") == "auto"
+        if section.get("retraction") == ORDER2_RETRACTION or \
+                section.get("rule", DEFAULT_RULE) != DEFAULT_RULE:
+            section["scheme"] = "order2"  # the only scheme that honours what the file asks
+        else:
+            section["scheme"] = "auto" if auto else FILE_SCHEME
+        return {**data, "discretization": section}
 
     model: str = Field(description="a built-in model (see `ocgroupoid list`) or custom")
     name: str | None = Field(None, description="problem name (default: the file's stem)")

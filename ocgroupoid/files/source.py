@@ -2,9 +2,10 @@
 
 Nothing in a file is executed: the loader is PyYAML's safe one, made stricter where YAML's
 defaults hide mistakes. A key written twice in one mapping is an error (YAML keeps the last
-silently), and so is a plain number YAML 1.1 reads as text (``1.0e300``: write ``1.0e+300``),
-an integer too large for a float (checked before it is converted) and a float literal that
-underflows to 0. A file is read
+silently), and so is an integer too large for a float (checked before it is converted) and a
+float literal that underflows to 0. A number is read as YAML 1.2 and everybody writes it:
+``1e-6``, ``1E6`` and ``.5`` are floats (YAML 1.1 reads the first two as text); its other
+surprises (``yes``, ``on``) stay booleans, refused where a number is expected. A file is read
 only within :data:`LIMITS`: its size, the nesting of its lists and mappings, and the number
 of values once every alias (``*name``) is expanded — a self-referencing alias or an alias
 bomb is refused before anything walks the expanded document. :class:`Locator` names where a
@@ -25,8 +26,8 @@ from ..model.ranges import FILE_BYTES
 
 #: what a problem file may be: bytes, nesting depth, values after expanding aliases
 LIMITS = {"bytes": FILE_BYTES, "depth": 32, "values": 100_000}
-# a number YAML 1.1 reads as text: an exponent without a dot or without a sign
-_EXPONENT_TEXT = re.compile(r"[-+]?(?:\d[\d_]*\.?[\d_]*|\.\d[\d_]*)[eE][-+]?\d+")
+# a number YAML 1.1 reads as text (an exponent without a dot or without a sign): read as a float
+_EXPONENT_NUMBER = re.compile(r"[-+]?(?:\d[\d_]*\.?[\d_]*|\.\d[\d_]*)[eE][-+]?\d+\Z")
 _MANTISSA = re.compile(r"[-+]?[0.]*(?:[eE].*)?")  # a float literal whose digits are all 0
 _INT_CHARS = 320  # longer integers are beyond the range of a float (309 digits)
 
@@ -43,17 +44,9 @@ def _line(node: yaml.Node) -> int:
     return node.start_mark.line + 1
 
 
-def _signed_exponent(text: str) -> str:
-    """``1e300`` -> ``1.0e+300``: the spelling YAML 1.1 reads as a number."""
-    mantissa, _, exponent = text.replace("_", "").lower().partition("e")
-    if "." not in mantissa:
-        mantissa += ".0"
-    sign = exponent[0] if exponent[0] in "+-" else "+"
-    return f"{mantissa}e{sign}{exponent.lstrip('+-')}"
-
-
 class StrictLoader(yaml.SafeLoader):
-    """``yaml.SafeLoader`` refusing duplicate keys and numbers it would misread."""
+    """``yaml.SafeLoader`` refusing duplicate keys and numbers beyond a float's range, and
+    reading ``1e-6`` as the number it is."""
 
     def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict:
         seen: dict[Any, int] = {}
@@ -70,14 +63,6 @@ class StrictLoader(yaml.SafeLoader):
                               f"(lines {first} and {_line(key_node)}); keep one of them")
             seen[key] = _line(key_node)
         return super().construct_mapping(node, deep=deep)
-
-    def construct_yaml_str(self, node: yaml.ScalarNode) -> str:
-        text = super().construct_yaml_str(node)
-        if node.style is None and _EXPONENT_TEXT.fullmatch(text):
-            raise Refusal(_line(node), f"{text} is read as text, not as a number (YAML 1.1 "
-                          f"needs a dot and a signed exponent); write {_signed_exponent(text)}, "
-                          "or quote it if text is meant")
-        return text
 
     def construct_yaml_int(self, node: yaml.ScalarNode) -> int:
         # checked before any conversion: Python refuses to read integers of > 4300 digits,
@@ -103,7 +88,8 @@ class StrictLoader(yaml.SafeLoader):
         return value
 
 
-StrictLoader.add_constructor("tag:yaml.org,2002:str", StrictLoader.construct_yaml_str)
+StrictLoader.add_implicit_resolver("tag:yaml.org,2002:float", _EXPONENT_NUMBER,
+                                   list("-+0123456789."))
 StrictLoader.add_constructor("tag:yaml.org,2002:int", StrictLoader.construct_yaml_int)
 StrictLoader.add_constructor("tag:yaml.org,2002:float", StrictLoader.construct_yaml_float)
 

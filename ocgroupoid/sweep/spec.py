@@ -7,7 +7,8 @@ as ``{rotvec: [0, 0, 1]}``). ``--random KEY=normal(mu, sigma)`` or ``uniform(a, 
 ``--samples M`` values with ``--seed S``. The points are the cartesian product of the axes
 (the last axis varies fastest), times the M samples when draws are given (the same samples
 at every grid point). Nothing is evaluated: the text is split, read as YAML
-(``yaml.safe_load``) or matched by a regular expression.
+(the problem files' safe loader: ``1e-6`` is a number there too) or matched by a regular
+expression.
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ import numpy as np
 import yaml
 
 from ..errors import ConfigError
+from ..files.source import Refusal, parse_yaml
 
 KEY = re.compile(r"[A-Za-z_]\w*(\.\w+)*")
 LAW = re.compile(r"\s*(\w+)\s*\(([^()]*)\)\s*")
@@ -111,7 +113,9 @@ def axis(key: str, spec: str | Sequence[Any]) -> Axis:
         out = listed(key, list(spec), repr(spec))
     elif spec.strip().startswith("["):
         try:
-            out = listed(key, yaml.safe_load(spec), spec.strip())
+            out = listed(key, parse_yaml(spec)[0], spec.strip())
+        except Refusal as err:
+            raise ConfigError(f"--grid {key}={spec.strip()}: {err.message}") from None
         except yaml.YAMLError as err:
             raise ConfigError(f"--grid {key}={spec.strip()}: not a valid YAML list "
                               f"({getattr(err, 'problem', err)}); check the brackets") from None
