@@ -4,8 +4,9 @@ For every problem file that does not name its scheme, both schemes solve it at t
 and order2 also at 2N and 4N (one start each, the file's other settings). Printed per run:
 the replay's landing error relative to the distance the plan covers (the quantity
 "verified" bounds, ``solve/verdict.py``), the solver time of the start, and whether the
-solution is verified. Writes ``OUT/bench_default_scheme.json`` (``--out``, default
-``results/``); ``--quick``: the canonical slew at N = 16.
+solution is verified. Writes ``OUT/bench_default_scheme.json`` and a chart of landing error
+against solver time, ``OUT/bench_default_scheme.png`` (``--out``, default ``results/``);
+``--quick``: the canonical slew at N = 16.
 
     python scripts/bench_default_scheme.py [--quick] [--out DIR]
 """
@@ -18,6 +19,7 @@ from rich.console import Console
 from rich.table import Table
 
 from ocgroupoid import files
+from ocgroupoid.bench.chart import save_png
 from ocgroupoid.bench.record import write_summary
 from ocgroupoid.bench.script import arguments
 from ocgroupoid.solve import compile as compile_problem
@@ -54,6 +56,29 @@ def unnamed(paths: list[Path]) -> list[Path]:
             if "scheme" not in files.load(p).raw.get("discretization", {})]
 
 
+def chart(rows: list[dict], path: Path) -> Path:
+    """Landing error against solver time, one line per file and scheme (order2 over N)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(8, 5.5), layout="constrained")
+    for i, name in enumerate(dict.fromkeys(r["file"] for r in rows)):
+        colour = f"C{i % 10}"
+        for scheme, marker in (("order4", "s"), ("order2", "o")):
+            mine = [r for r in rows if r["file"] == name and r["scheme"] == scheme]
+            ax.loglog([r["solver_seconds"] for r in mine], [r["landing"] for r in mine],
+                      marker=marker, color=colour, ls="-" if scheme == "order2" else "none",
+                      label=f"{name.removesuffix('.yaml')} {scheme}")
+    ax.set_xlabel("solver time of one start [s]")
+    ax.set_ylabel("landing error / distance covered")
+    ax.set_title("order4 at the file's N (squares) against order2 at N, 2N, 4N (circles)")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7, ncol=2, loc="center left", bbox_to_anchor=(1.0, 0.5))
+    return save_png(fig, path, 110)
+
+
 def main() -> None:
     args = arguments(__doc__.splitlines()[0], RESULTS)
     paths = [ROOT / "problems" / "so3_rest_to_rest.yaml"] if args.quick else \
@@ -73,6 +98,7 @@ def main() -> None:
                       f"{r['solver_seconds']:.3f}", str(r["verified"]))
     console.print(table)
     write_summary(args.out / "bench_default_scheme.json", {"rows": rows})
+    chart(rows, args.out / "bench_default_scheme.png")
 
 
 if __name__ == "__main__":

@@ -358,18 +358,20 @@ def test_ctrl_c_while_importing_is_one_line_and_exit_130(command: list[str]) -> 
     assert messages == ["ocgroupoid: interrupted while starting"], messages
 
 
-# ------------------------------------------------------------------ README
+# ------------------------------------------------------------------ the tutorials
 
 
-def test_readme_snippets_for_products_and_reading_solutions_run(tmp_path: Path) -> None:
-    """The README's product of factors and its Solution read-back run as written."""
-    text = (ROOT / "README.md").read_text()
+def test_tutorial_snippets_for_products_and_reading_solutions_run(tmp_path: Path) -> None:
+    """The tutorials' product of factors and their Solution read-back run as written and give
+    the shapes they describe."""
+    text = "".join((ROOT / "docs" / "tutorials" / page).read_text()
+                   for page in ("python-problem.md", "first-solve.md"))
     blocks = re.findall(r"```python\n(.*?)```", text, re.S)
     product = next(b for b in blocks if "og.Groupoid(" in b)
     reading = next(b for b in blocks if "og.Solution.from_json(" in b)
     code = "\n".join([
         "import casadi as ca, numpy as np", "import ocgroupoid as og", product,
-        "assert sol.success and sol.controls.shape == (33, 5)",
+        "assert sol3.success and sol3.controls.shape == (17, 5)",
         "from ocgroupoid.models.rigid_body import rigid_body",
         "og.solve(rigid_body(), N=8).to_json('sol.json')", reading,
         "assert sol.states['R'].shape == (9, 3, 3) and sol.control_names == ['u1', 'u2', 'u3']"])
