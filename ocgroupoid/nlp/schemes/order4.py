@@ -47,8 +47,7 @@ from ...errors import ConfigError
 from ...model.problem import Problem
 from ..assembly import Block, Kind
 from ..layout import Layout
-from .base import Pick, Readout, Scheme
-from .order2 import DEFAULT_RULE, columns, stage_function
+from .base import DEFAULT_RULE, Pick, Readout, Scheme, columns, stage_function
 
 SQRT3, SQRT15 = float(np.sqrt(3.0)), float(np.sqrt(15.0))
 GAUSS2 = np.array([0.5 - SQRT3 / 6, 0.5 + SQRT3 / 6])  # nodes of the 2-point rule on [0, 1]
