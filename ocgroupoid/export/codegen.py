@@ -35,7 +35,7 @@ import json
 import re
 import shutil
 import subprocess
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Collection, Sequence
 
@@ -54,14 +54,12 @@ from ..model.ranges import (
     block_range,
     positive_parameters,  # noqa: F401  (re-exported: the export API names it)
 )
+from ..nlp.method import Method
+from ..nlp.options import SolverOptions
 from ..nlp.parameters import ParameterValues
-from ..nlp.schemes import DEFAULT_RULE, DEFAULT_SCHEME
-from ..nlp.transcription import (
-    C_READOUT_OUTPUTS,
-    DEFAULT_BACKEND,
-    MAX_SECONDS,
-    Transcription,
-)
+from ..nlp.program import C_READOUT_OUTPUTS
+from ..nlp.shortcuts import choose
+from ..nlp.transcription import Transcription
 from ..solve.outputs import check_folder, write_atomic
 from ..solve.solver import Solver
 from ..solve.verify_graph import CHECKS, FIGURES
@@ -367,15 +365,19 @@ def _write_all(folder: Path, files: dict[str, str | bytes]) -> None:
     record({**{k: v for k, v in old.items() if k not in new}, **new})
 
 
-def export_c(problem: Problem | Solver, folder: str | Path, N: int = 64,
-             retraction: str = "cayley", rule: str = DEFAULT_RULE,
+def export_c(problem: Problem | Solver, folder: str | Path, N: int | None = None,
+             retraction: str | None = None, rule: str | None = None,
              ipopt: dict[str, Any] | None = None, build: bool = False,
              ipopt_lib: str | Path | None = None, ipopt_include: str | Path | None = None,
-             cflags: str = "", scheme: str = DEFAULT_SCHEME, steps: str = "uniform",
+             cflags: str = "", scheme: str | None = None, steps: str | None = None,
              force: bool = False, positive: Collection[str] = (),
-             backend: str = DEFAULT_BACKEND, max_seconds: float = MAX_SECONDS,
-             prefix: str = DEFAULT_PREFIX) -> Export:
-    """Write ``problem`` compiled on N intervals as a C project in ``folder``.
+             backend: str | None = None, max_seconds: float | None = None,
+             prefix: str = DEFAULT_PREFIX, *, method: Method | None = None,
+             options: SolverOptions | None = None) -> Export:
+    """Write ``problem`` compiled with ``method`` (N intervals, scheme, retraction, rule)
+    and ``options`` (backend, IPOPT's options, ``max_seconds``) as a C project in
+    ``folder``; the keywords N to max_seconds replace their fields, as in
+    :func:`~ocgroupoid.solve.entry.compile` (the exported solver is C of its own: no jit).
 
     ``problem`` may also be a compiled :class:`Solver` (its N, scheme, retraction, rule and
     IPOPT options are kept). IPOPT's own printing is switched off (``print_level 0``) in a
@@ -396,7 +398,11 @@ def export_c(problem: Problem | Solver, folder: str | Path, N: int = 64,
     macro (in upper case) and C file name of the export: exports with different prefixes
     link into one program.
     """
-    if steps == "adaptive" or (isinstance(problem, Solver) and problem.disc.steps == "adaptive"):
+    method, options = choose(method, options, N=N, retraction=retraction, rule=rule,
+                             ipopt=ipopt, scheme=scheme, steps=steps, backend=backend,
+                             max_seconds=max_seconds)
+    if method.steps == "adaptive" or (isinstance(problem, Solver)
+                                      and problem.disc.steps == "adaptive"):
         raise ConfigError("adaptive steps come from a second, phased solve placed on the "
                           "switches of a first one, which the exported solver does not run; "
                           "export with uniform steps (--set discretization.steps=uniform)")
@@ -409,8 +415,8 @@ def export_c(problem: Problem | Solver, folder: str | Path, N: int = 64,
     if isinstance(problem, Solver):
         solver = problem
     else:
-        solver = Solver(problem, N, retraction, rule, {**(ipopt or {}), **EXPORT_IPOPT}, scheme,
-                        steps, backend=backend, max_seconds=max_seconds)
+        solver = Solver(problem, method, replace(
+            options, ipopt={**options.ipopt, **EXPORT_IPOPT}, jit=False))
     tr = solver.transcription
     p = tr.pack()
     names = {"prefix": prefix, "PREFIX": prefix.upper(), "VERSION": __version__}
