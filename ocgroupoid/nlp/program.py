@@ -38,7 +38,7 @@ from .layout import Layout, Masks
 from .method import Discretization, Method
 from .parameters import ParameterValues
 from .schemes import make_scheme
-from .schemes.order4 import GAUSS2
+from .schemes.gauss import GAUSS2
 from .shared import shared_blocks
 
 #: outputs of the read-out Function, in the order exported C reads them (enum ocg_output)
