@@ -1,8 +1,11 @@
 """ocgroupoid: optimal control on Lie groups and Lie groupoids, compiled to one NLP.
 
 State the continuous problem with :class:`Problem` on a product of groupoid factors
-(:class:`LieGroupFactor`, :class:`Pair`, :class:`SphereAction`), then ``compile`` it on N
-intervals with a scheme and a retraction, and ``solve`` it with IPOPT.
+(:class:`LieGroupFactor`, :class:`Pair`, :class:`SphereAction`), choose how to discretise it
+(:class:`Method`: N intervals, a scheme, a retraction) and how to solve it
+(:class:`SolverOptions`: IPOPT or fatrop, their options), then ``compile`` it once and
+``solve`` it (``og.solve(problem, og.Method(N=64), og.SolverOptions())``, or by keyword,
+``og.solve(problem, N=64)``).
 
 The package is laid out as its pipeline: ``lie`` -> ``groupoid`` -> ``model`` (problem,
 mechanics) -> ``nlp`` (schemes, layout, assembly, transcription) -> ``solve`` (solver,
@@ -29,7 +32,7 @@ from .groupoid import Groupoid, LieGroupFactor, Pair, SphereAction
 from .lie import SE2, SE3, SO3, se2, se3, so3
 from .model import GuessContext, Problem
 from .mpc import MpcResult, mpc
-from .nlp import Discretization, Guess, Transcription
+from .nlp import Discretization, Guess, Method, SolverOptions, Transcription
 from .plotting import plot, view  # registers Solution.plot; matplotlib loads on use
 from .solve import Solution, Solver, compile, solve, solve_to_accuracy
 from .solve.simulate import Simulation, simulate
@@ -37,7 +40,8 @@ from .sweep import sweep  # Dask, pandas and pyarrow are imported when a sweep r
 
 __all__ = [
     "lie", "so3", "Problem", "GuessContext", "Groupoid", "LieGroupFactor", "Pair",
-    "SphereAction", "Discretization", "Transcription", "Guess", "Solver", "compile", "solve",
+    "SphereAction", "Method", "SolverOptions", "Discretization", "Transcription", "Guess",
+    "Solver", "compile", "solve",
     "solve_to_accuracy",
     "Solution", "OcgError", "ConfigError", "DimensionError", "SingularityError",
     "BoundaryError", "TranscriptionError", "SolverError", "export_c", "sweep", "__version__",

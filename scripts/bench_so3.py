@@ -32,7 +32,8 @@ from ocgroupoid.bench.script import arguments, steps  # noqa: E402
 from ocgroupoid.bench.timing import median_seconds  # noqa: E402
 from ocgroupoid.models.rigid_body import rigid_body  # noqa: E402
 from ocgroupoid.nlp.assembly import StageDerivatives, plain_nlp  # noqa: E402
-from ocgroupoid.nlp.transcription import Transcription, nlpsol_options  # noqa: E402
+from ocgroupoid.nlp.backends.ipopt import nlpsol_options  # noqa: E402
+from ocgroupoid.nlp.transcription import Transcription  # noqa: E402
 from ocgroupoid.solve import geodesic_guesses  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent.parent / "results"

@@ -13,7 +13,7 @@ import ocgroupoid as og
 from ocgroupoid import files
 from ocgroupoid.errors import ConfigError
 from ocgroupoid.nlp.assembly import Block, Kind
-from ocgroupoid.nlp.schemes.order2 import stage_function
+from ocgroupoid.nlp.schemes.base import stage_function
 from ocgroupoid.nlp.stageform import NotStaged, StageForm, stage_form
 from ocgroupoid.solve import compile as compile_problem
 

@@ -11,14 +11,16 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass, replace
+from typing import Any
 
 from ..errors import ConfigError
 from ..lie.retraction import RETRACTION_NAMES
 from ..lie.rn import Rn
 from ..model.problem import Problem
+from ..nlp.method import DEFAULT_RETRACTION, Method as Discretisation
+from ..nlp.options import BACKENDS, DEFAULT_BACKEND, SolverOptions
 from ..nlp.schemes import BASELINES, DEFAULT_RULE, SCHEME_NAMES
 from ..nlp.schemes.coordinates import coordinates
-from ..nlp.transcription import BACKENDS, DEFAULT_BACKEND
 
 
 @dataclass(frozen=True)
@@ -26,7 +28,7 @@ class Method:
     """A scheme and the retraction of its group factors."""
 
     scheme: str
-    retraction: str = "cayley"
+    retraction: str = DEFAULT_RETRACTION
     backend: str = DEFAULT_BACKEND
     jit: bool = False
 
@@ -38,7 +40,7 @@ class Method:
     @property
     def label(self) -> str:
         """``order2`` (cayley), ``order2:exp``, ``rk4_quat``: how options and charts name it."""
-        name = self.scheme if self.baseline or self.retraction == "cayley" else \
+        name = self.scheme if self.baseline or self.retraction == DEFAULT_RETRACTION else \
             f"{self.scheme}:{self.retraction}"
         return name + ("" if self.backend == DEFAULT_BACKEND else f"@{self.backend}") + \
             ("+jit" if self.jit else "")
@@ -53,6 +55,16 @@ class Method:
         """The problem file's rule applies to order2; every other scheme has only the
         midpoint rule."""
         return file_rule if self.scheme == "order2" else DEFAULT_RULE
+
+    def on(self, N: int, file_rule: str, steps: str) -> Discretisation:
+        """The API's method (:class:`~ocgroupoid.nlp.method.Method`) of this one on N
+        intervals, with the problem file's rule where it applies (:meth:`rule`) and steps."""
+        return Discretisation(N, scheme=self.scheme, retraction=self.retraction,
+                              rule=self.rule(file_rule), steps=steps)
+
+    def options(self, ipopt: dict[str, Any]) -> SolverOptions:
+        """The solver options of this method: its backend and jit, IPOPT's ``ipopt``."""
+        return SolverOptions(backend=self.backend, ipopt=dict(ipopt), jit=self.jit)
 
 
 #: ours with cayley and exp, then the baselines
@@ -80,7 +92,7 @@ def parse_methods(text: str | None, default: tuple[Method, ...]) -> list[Method]
             raise ConfigError(f"--schemes: unknown scheme {scheme!r}; choose from "
                               f"{', '.join(SCHEME_NAMES)} (a retraction after a colon: "
                               "order2:exp)")
-        retraction = retraction or "cayley"
+        retraction = retraction or DEFAULT_RETRACTION
         if retraction not in RETRACTION_NAMES:
             raise ConfigError(f"--schemes: unknown retraction {retraction!r} in {item!r}; "
                               f"choose from {', '.join(RETRACTION_NAMES)}")
@@ -127,11 +139,12 @@ def redundant(methods: list[Method], problem: Problem) -> dict[str, str]:
     present = set(methods)
     out = {}
     for m in methods:
-        quat, cayley = replace(m, scheme="rk4_quat"), replace(m, retraction="cayley")
+        quat, cayley = replace(m, scheme="rk4_quat"), replace(m, retraction=DEFAULT_RETRACTION)
         if m.baseline and m.scheme != "rk4_quat" and not own_coordinates and quat in present:
             out[m.label] = f"identical to {quat.label} here: no SO(3) factor to carry " \
                            "otherwise"
-        elif not m.baseline and m.retraction != "cayley" and not curved and cayley in present:
+        elif not m.baseline and m.retraction != DEFAULT_RETRACTION and not curved and \
+                cayley in present:
             out[m.label] = f"identical to {cayley.label} here: every retraction is the " \
                            "translation on R^n"
     return out

@@ -28,7 +28,7 @@ import numpy as np
 from ..errors import ConfigError, SolverError
 from ..model.problem import Problem
 from ..nlp.transcription import RawResult
-from ..solve import Solution, compile, distinct_minima, interpolate, make_solution
+from ..solve import Solution, distinct_minima, interpolate, make_solution
 from ..solve.richardson import observed_order, relative, richardson_error
 from .methods import Method
 from .minimum import SAME_COST
@@ -79,8 +79,7 @@ def reference(problem: Problem, setting: Setting, N: int, multistart: bool,
     check_reference_N(N)
     N0 = max(4, N // 16)
     step(f"reference: order4 N={N0}" + (", every start" if multistart else ""))
-    solver = compile(problem, N0, "cayley", Method("order4").rule(setting.rule),
-                     setting.ipopt, "order4", setting.steps)
+    solver = setting.compile(problem, Method("order4"), N0)
     tr = solver.transcription
     p = tr.pack()
     results = [tr.solve(g, p) for g in solver.guesses(tr, p, multistart)]
@@ -90,8 +89,7 @@ def reference(problem: Problem, setting: Setting, N: int, multistart: bool,
     for n in (N // 4, N // 2, N):
         step(f"reference: order4 N={n}")
         guess = interpolate(solver.transcription, sol.x, sol.p, n)
-        solver = compile(problem, n, "cayley", Method("order4").rule(setting.rule),
-                         setting.ipopt, "order4", setting.steps)
+        solver = setting.compile(problem, Method("order4"), n)
         sol = _solved(solver.solve(guess=guess, replay=False), f"order4, N={n}")
         fine[n] = (solver.transcription, sol)
     J4 = [fine[n][1].cost for n in (N // 4, N // 2, N)]
@@ -121,8 +119,7 @@ def _check(problem: Problem, setting: Setting, N: int,
         for n in Ns:
             step(f"reference check: rk4_quat N={n}")
             tr, s = fine[n]
-            shooting = compile(problem, n, "cayley", Method("rk4_quat").rule(setting.rule),
-                               setting.ipopt, "rk4_quat", setting.steps)
+            shooting = setting.compile(problem, Method("rk4_quat"), n)
             Jq.append(_solved(shooting.solve(guess=interpolate(tr, s.x, s.p, n),
                                              replay=False), f"rk4_quat, N={n}").cost)
     except (ConfigError, SolverError) as e:  # the baseline may not apply to the problem

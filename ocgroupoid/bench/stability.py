@@ -28,7 +28,6 @@ from .. import files
 from ..errors import ConfigError, OcgError, SolverError
 from ..lie import so3
 from ..model.problem import Problem
-from ..solve import compile
 from .methods import Method
 from .outcome import OUTCOMES, error_cell, judge, net_turn
 from .record import Rows, write_summary
@@ -56,8 +55,7 @@ def manoeuvre(state: str, axis: np.ndarray, angle: float) -> str:
 def reference(problem: Problem, setting: Setting, state: str, axis: np.ndarray
               ) -> dict[str, Any]:
     """order4 (cayley) on REFERENCE_N intervals, every start of the multi-start."""
-    solver = compile(problem, REFERENCE_N, "cayley", Method("order4").rule(setting.rule),
-                     setting.ipopt, "order4", setting.steps)
+    solver = setting.compile(problem, Method("order4"), REFERENCE_N)
     sol = solver.solve(multistart=True)
     if sol.status != "Solve_Succeeded":
         raise SolverError(f"the reference (order4, N={REFERENCE_N}) did not solve: "
@@ -109,8 +107,7 @@ def stability(path: Path, overrides: list[str], out: Path, methods: list[Method]
                 for N in Ns:
                     progress(f"{name}: {angle:g} rad, {m.label} N={N}", done, total)
                     try:
-                        solver = compile(problem, N, m.retraction, m.rule(setting.rule),
-                                         setting.ipopt, m.scheme, setting.steps)
+                        solver = setting.compile(problem, m, N)
                         sol = solver.solve(multistart=multistart and bool(f.solver.multistart))
                         cell = judge(m, N, angle, state, axis_v, solver.transcription, sol, ref)
                     except (OcgError, RuntimeError) as e:  # RuntimeError: CasADi's

@@ -16,8 +16,9 @@ from dataclasses import dataclass
 from typing import Any, Callable, TypeVar
 
 from ..model.problem import Problem
+from ..nlp.method import DEFAULT_STEPS
 from ..nlp.transcription import Guess
-from ..solve import Solution, compile, distinct_minima, make_solution
+from ..solve import Solution, Solver, compile, distinct_minima, make_solution
 from .methods import Method
 
 MIN_SECONDS = 0.25  # a solve faster than this is repeated until the repeats add up to it,
@@ -31,7 +32,11 @@ class Setting:
 
     ipopt: dict[str, Any]
     rule: str
-    steps: str = "uniform"
+    steps: str = DEFAULT_STEPS
+
+    def compile(self, problem: Problem, method: Method, N: int) -> Solver:
+        """``method`` compiled on N intervals in this setting."""
+        return compile(problem, method.on(N, self.rule, self.steps), method.options(self.ipopt))
 
 
 @dataclass
@@ -69,8 +74,7 @@ def timed_solve(problem: Problem, method: Method, N: int, setting: Setting, repe
     """Build ``method`` on N intervals and solve it ``repeats`` times from one cold start
     (module docstring); raises what building raises (ConfigError, SingularityError)."""
     t0 = time.perf_counter()
-    solver = compile(problem, N, method.retraction, method.rule(setting.rule), setting.ipopt,
-                     method.scheme, setting.steps, method.jit, method.backend)
+    solver = setting.compile(problem, method, N)
     tr = solver.transcription
     p = tr.pack()
     guess = cold_start(solver.guesses(tr, p, start is not None), start)

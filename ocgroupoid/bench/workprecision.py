@@ -25,7 +25,7 @@ from typing import Any, Callable
 from .. import files
 from ..errors import ConfigError, OcgError
 from ..model.problem import Problem
-from ..solve import Solution, compile
+from ..solve import Solution
 from .chart import work_precision_chart
 from .equal_accuracy import compare, headline, lines
 from .methods import Method, redundant
@@ -98,8 +98,7 @@ def check_methods(problem: Problem, methods: list[Method], setting: Setting, N: 
     is a ConfigError naming it, before anything is timed."""
     for m in methods:
         try:
-            compile(problem, N, m.retraction, m.rule(setting.rule), setting.ipopt, m.scheme,
-                    setting.steps, m.jit, m.backend)
+            setting.compile(problem, m, N)
         except OcgError as e:
             raise type(e)(f"--schemes {m.label}: {e}") from None
 

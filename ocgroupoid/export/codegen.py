@@ -30,12 +30,9 @@ result's primal-dual point (``{prefix}solve_warm``).
 
 from __future__ import annotations
 
-import hashlib
 import json
 import re
-import shutil
-import subprocess
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Collection, Sequence
 
@@ -54,17 +51,17 @@ from ..model.ranges import (
     block_range,
     positive_parameters,  # noqa: F401  (re-exported: the export API names it)
 )
+from ..nlp.method import Method
+from ..nlp.options import SolverOptions
 from ..nlp.parameters import ParameterValues
-from ..nlp.schemes import DEFAULT_RULE, DEFAULT_SCHEME
-from ..nlp.transcription import (
-    C_READOUT_OUTPUTS,
-    DEFAULT_BACKEND,
-    MAX_SECONDS,
-    Transcription,
-)
-from ..solve.outputs import check_folder, write_atomic
+from ..nlp.program import C_READOUT_OUTPUTS
+from ..nlp.shortcuts import choose
+from ..nlp.transcription import Transcription
+from ..solve.outputs import write_atomic
 from ..solve.solver import Solver
 from ..solve.verify_graph import CHECKS, FIGURES
+from .build import casadi_dir, ipopt_paths, make  # noqa: F401  (casadi_dir: the export API)
+from .folder import MANIFEST, claim_folder, digest, manifest
 from .functions import CHECK_FAILURES, generate
 
 TEMPLATES = Path(__file__).resolve().parent / "c_templates"
@@ -79,8 +76,6 @@ _PREFIX = re.compile(r"[a-z][a-z0-9_]*_")
 #: the libraries each backend links with (all in the casadi wheel)
 BACKEND_LIBS = {"ipopt": "-lipopt", "fatrop": "-lipopt -lfatrop -lblasfeo"}
 EXPORT_IPOPT = {"print_level": 0, "sb": "yes"}  # stdout carries the JSON, nothing else
-# What export_c wrote (file -> sha256): a folder holding it is one export_c may overwrite.
-MANIFEST = ".ocgroupoid-export.json"
 
 
 # ----------------------------------------------------------------- parameter files
@@ -119,23 +114,6 @@ class Export:
     n_values: int  # numbers of a parameter file
     binary: Path | None  # DIR/solve when built
     solver: Solver
-
-
-def casadi_dir() -> Path:
-    """The folder of the casadi package: libipopt.so and include/coin-or live there."""
-    return Path(ca.__file__).resolve().parent
-
-
-def _ipopt_paths(lib: str | Path | None, include: str | Path | None) -> tuple[Path, Path]:
-    lib = Path(lib) if lib is not None else casadi_dir()
-    include = Path(include) if include is not None else casadi_dir() / "include"
-    if not any(lib.glob("libipopt.so*")) and not any(lib.glob("libipopt*.dylib")):
-        raise ExportError(f"no libipopt in {lib}; pass ipopt_lib= (or IPOPT_LIB=... to make) "
-                          "with the folder that holds libipopt.so")
-    if not (include / "coin-or" / "IpStdCInterface.h").is_file():
-        raise ExportError(f"no coin-or/IpStdCInterface.h under {include}; pass ipopt_include= "
-                          "(or IPOPT_INCLUDE=... to make) with IPOPT's include folder")
-    return lib, include
 
 
 def _c_string(s: str) -> str:
@@ -297,48 +275,6 @@ def _blocks_table(values: ParameterValues) -> str:
     return "\n".join(rows)
 
 
-def _digest(data: str | bytes) -> str:
-    return hashlib.sha256(data.encode() if isinstance(data, str) else data).hexdigest()
-
-
-def _manifest(folder: Path) -> dict[str, list[str]] | None:
-    """What an earlier export wrote in ``folder`` (file -> accepted digests), or None."""
-    try:
-        files = json.loads((folder / MANIFEST).read_text())["files"]
-        return {str(k): [str(d) for d in v] for k, v in files.items()}
-    except (OSError, ValueError, KeyError, TypeError, AttributeError):
-        return None
-
-
-def claim_folder(folder: str | Path, force: bool = False, what: str = "export folder") -> Path:
-    """Check, before anything is compiled, that ``folder`` may receive an export: it is new,
-    empty, or an earlier export whose files are unchanged (``MANIFEST`` records them).
-    Anything else (a README.md, Makefile, main.c... that export_c did not write, or one that
-    was edited since) is an ExportError unless ``force``. Returns the folder as a Path."""
-    folder = check_folder(folder, what)
-    if force or not folder.is_dir():
-        return folder
-    present = sorted(p.name for p in folder.iterdir() if p.name != MANIFEST)
-    if not present and not (folder / MANIFEST).exists():
-        return folder
-    known = _manifest(folder)
-    if known is None:
-        shown = ", ".join(present[:5]) + (", ..." if len(present) > 5 else "")
-        raise ExportError(f"{what} {folder}: is not empty ({shown}) and was not written by "
-                          "export-c; export into a new or empty folder, or pass --force "
-                          "(force=True) to overwrite its files")
-    for name in present:
-        path = folder / name
-        if name not in known:
-            continue  # the user's own files and the build's products are left alone
-        if not path.is_file() or _digest(path.read_bytes()) not in known[name]:
-            raise ExportError(f"{what} {folder}: {name} was changed since export-c wrote it; "
-                              "move your edits "
-                              "elsewhere (e.g. copy params.txt), or pass --force (force=True) "
-                              "to overwrite it")
-    return folder
-
-
 def check_prefix(prefix: str) -> str:
     """``prefix`` if it can start C names: lower-case letters, digits and ``_``, a letter
     first and ``_`` last (``so3_``); else a ConfigError with the fix."""
@@ -352,8 +288,8 @@ def check_prefix(prefix: str) -> str:
 def _write_all(folder: Path, files: dict[str, str | bytes]) -> None:
     """Write every file atomically; the manifest first accepts the old and the new contents
     (an interrupted export can be redone), then only the new ones."""
-    old = _manifest(folder) or {}
-    new = {name: [_digest(data)] for name, data in files.items()}
+    old = manifest(folder) or {}
+    new = {name: [digest(data)] for name, data in files.items()}
     both = {name: sorted(set(old.get(name, [])) | set(new.get(name, [])))
             for name in set(old) | set(new)}
 
@@ -367,15 +303,19 @@ def _write_all(folder: Path, files: dict[str, str | bytes]) -> None:
     record({**{k: v for k, v in old.items() if k not in new}, **new})
 
 
-def export_c(problem: Problem | Solver, folder: str | Path, N: int = 64,
-             retraction: str = "cayley", rule: str = DEFAULT_RULE,
+def export_c(problem: Problem | Solver, folder: str | Path, N: int | None = None,
+             retraction: str | None = None, rule: str | None = None,
              ipopt: dict[str, Any] | None = None, build: bool = False,
              ipopt_lib: str | Path | None = None, ipopt_include: str | Path | None = None,
-             cflags: str = "", scheme: str = DEFAULT_SCHEME, steps: str = "uniform",
+             cflags: str = "", scheme: str | None = None, steps: str | None = None,
              force: bool = False, positive: Collection[str] = (),
-             backend: str = DEFAULT_BACKEND, max_seconds: float = MAX_SECONDS,
-             prefix: str = DEFAULT_PREFIX) -> Export:
-    """Write ``problem`` compiled on N intervals as a C project in ``folder``.
+             backend: str | None = None, max_seconds: float | None = None,
+             prefix: str = DEFAULT_PREFIX, *, method: Method | None = None,
+             options: SolverOptions | None = None) -> Export:
+    """Write ``problem`` compiled with ``method`` (N intervals, scheme, retraction, rule)
+    and ``options`` (backend, IPOPT's options, ``max_seconds``) as a C project in
+    ``folder``; the keywords N to max_seconds replace their fields, as in
+    :func:`~ocgroupoid.solve.entry.compile` (the exported solver is C of its own: no jit).
 
     ``problem`` may also be a compiled :class:`Solver` (its N, scheme, retraction, rule and
     IPOPT options are kept). IPOPT's own printing is switched off (``print_level 0``) in a
@@ -396,7 +336,11 @@ def export_c(problem: Problem | Solver, folder: str | Path, N: int = 64,
     macro (in upper case) and C file name of the export: exports with different prefixes
     link into one program.
     """
-    if steps == "adaptive" or (isinstance(problem, Solver) and problem.disc.steps == "adaptive"):
+    method, options = choose(method, options, N=N, retraction=retraction, rule=rule,
+                             ipopt=ipopt, scheme=scheme, steps=steps, backend=backend,
+                             max_seconds=max_seconds)
+    if method.steps == "adaptive" or (isinstance(problem, Solver)
+                                      and problem.disc.steps == "adaptive"):
         raise ConfigError("adaptive steps come from a second, phased solve placed on the "
                           "switches of a first one, which the exported solver does not run; "
                           "export with uniform steps (--set discretization.steps=uniform)")
@@ -405,12 +349,12 @@ def export_c(problem: Problem | Solver, folder: str | Path, N: int = 64,
                           f"{type(problem).__name__}")
     check_prefix(prefix)
     folder = claim_folder(folder, force)
-    lib, include = _ipopt_paths(ipopt_lib, ipopt_include)
+    lib, include = ipopt_paths(ipopt_lib, ipopt_include)
     if isinstance(problem, Solver):
         solver = problem
     else:
-        solver = Solver(problem, N, retraction, rule, {**(ipopt or {}), **EXPORT_IPOPT}, scheme,
-                        steps, backend=backend, max_seconds=max_seconds)
+        solver = Solver(problem, method, replace(
+            options, ipopt={**options.ipopt, **EXPORT_IPOPT}, jit=False))
     tr = solver.transcription
     p = tr.pack()
     names = {"prefix": prefix, "PREFIX": prefix.upper(), "VERSION": __version__}
@@ -440,22 +384,3 @@ def export_c(problem: Problem | Solver, folder: str | Path, N: int = 64,
     _write_all(folder, files)
     binary = make(folder, cflags) if build else None
     return Export(folder, pb.name, tr.N, tr.nx, tr.np, tr.ng, tr.values.size, binary, solver)
-
-
-def make(folder: str | Path, cflags: str = "", target: str = "solve",
-         timeout: float = 600.0) -> Path:
-    """Run ``make -C folder target`` with extra ``CFLAGS``; the path of the built target
-    (``solve``, or a program ``target`` built from ``folder/target.c`` and libocg.a)."""
-    folder = Path(folder)
-    tool = shutil.which("make")
-    if tool is None:
-        raise ExportError("`make` was not found on PATH; install make and a C compiler "
-                          "(e.g. apt-get install build-essential) or build by hand (README)")
-    cmd = [tool, "-C", str(folder), target] + ([f"CFLAGS={cflags}"] if cflags else [])
-    r = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
-    if r.returncode != 0:
-        tail = "\n".join((r.stdout + r.stderr).strip().splitlines()[-20:])
-        raise ExportError(f"building {folder / target} failed (make exit {r.returncode}):\n"
-                          f"{tail}\nCheck that a C compiler is installed and that IPOPT_LIB/"
-                          "IPOPT_INCLUDE in the Makefile point at libipopt and its headers.")
-    return folder / target

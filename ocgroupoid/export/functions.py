@@ -22,7 +22,8 @@ from typing import Any
 
 import casadi as ca
 
-from ..nlp.transcription import C_READOUT_OUTPUTS, Transcription
+from ..nlp.program import C_READOUT_OUTPUTS
+from ..nlp.transcription import Transcription
 from ..solve.diagnostics import replay_of
 from ..solve.verdict import REPLAY_TOLERANCE, check_tolerance
 from ..solve.verify_graph import verify_function

@@ -14,8 +14,9 @@ from pydantic_core import PydanticCustomError
 from ..lie.retraction import RETRACTION_NAMES
 from ..model.ranges import T_RANGE, TIME_RANGE
 from ..model.values import Strict, number, positive
+from ..nlp.method import DEFAULT_RETRACTION, DEFAULT_STEPS, MAX_BOUND_POINTS, STEPS
+from ..nlp.options import BACKENDS, DEFAULT_BACKEND, MAX_SECONDS
 from ..nlp.schemes import DEFAULT_RULE, SCHEME_NAMES
-from ..nlp.transcription import BACKENDS, DEFAULT_BACKEND, MAX_SECONDS
 from ..solve.auto import ACCURACY_MAX, N_MAX, N_MIN
 
 #: the scheme of a problem file that names none (with a fixed N): order4 lands within 1e-6
@@ -173,13 +174,15 @@ class DiscretizationSection(Strict):
         f"file names none: {FILE_SCHEME} with a fixed N, auto with N: auto, order2 where the "
         "file asks for the first_order retraction or a rule other than midpoint")
     retraction: Literal[RETRACTION_NAMES] = Field(  # type: ignore[valid-type]
-        "cayley", description="cayley (default), exp, or first_order (the seeds' rule)")
-    rule: str = Field("midpoint", description="discretisation rule of the constraints")
-    steps: Literal["uniform", "adaptive"] = Field(
-        "uniform", description="uniform steps h = T/N, or adaptive ones (order4)")
+        DEFAULT_RETRACTION, description="cayley (default), exp, or first_order (the seeds' "
+        "rule)")
+    rule: str = Field(DEFAULT_RULE, description="discretisation rule of the constraints")
+    steps: Literal[STEPS] = Field(  # type: ignore[valid-type]
+        DEFAULT_STEPS, description="uniform steps h = T/N, or adaptive ones (order4)")
     bound_points: int = Field(
-        0, ge=0, le=16, description="impose the bounds at this many more points inside every "
-        "interval (order4), where a bound is violated between the scheme's points")
+        0, ge=0, le=MAX_BOUND_POINTS, description="impose the bounds at this many more "
+        "points inside every interval (order4), where a bound is violated between the "
+        "scheme's points")
 
 
 class SolverSection(Strict):

@@ -29,11 +29,13 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from ..errors import ConfigError, SolverError
 from ..model.problem import Problem
 from ..nlp.assembly import Kind
+from ..nlp.method import DEFAULT_RETRACTION, Method
+from ..nlp.options import DEFAULT_BACKEND, SolverOptions
 from ..nlp.schemes import DEFAULT_RULE, DEFAULT_SCHEME
-from ..nlp.transcription import DEFAULT_BACKEND, Transcription
+from ..nlp.transcription import Transcription
 from ..solve.readout import control_ppoly
 from ..solve.replay import terminal_errors
-from ..solve.solver import compile
+from ..solve.solver import Solver
 from .controller import Converged, Outcome, RealTime
 from .plant import Plant, mismatched
 from .report import MpcResult, Step
@@ -84,7 +86,8 @@ def _controls_on(ppoly: dict[str, np.ndarray], t: np.ndarray) -> np.ndarray:
 def mpc(problem: Problem, N: int = 32, steps: int | None = None, *, rti: bool = False,
         horizon: str = "receding", noise: float = 0.0, mismatch: dict[str, float] | None = None,
         seed: int = 0, sample: float | None = None, qp: str = "hpipm",
-        retraction: str = "cayley", rule: str = DEFAULT_RULE, scheme: str = DEFAULT_SCHEME,
+        retraction: str = DEFAULT_RETRACTION, rule: str = DEFAULT_RULE,
+        scheme: str = DEFAULT_SCHEME,
         ipopt: dict[str, Any] | None = None, backend: str = DEFAULT_BACKEND,
         progress: bool | Callable[[int, int], None] = False) -> MpcResult:
     """Run ``problem`` in closed loop for ``steps`` samples (module docstring).
@@ -100,7 +103,8 @@ def mpc(problem: Problem, N: int = 32, steps: int | None = None, *, rti: bool = 
     K = steps if steps is not None else (N if horizon == "shrinking" else 2 * N)
     _check(K, N, horizon, problem.T_free, sample)
     mismatch = dict(mismatch or {})
-    solver = compile(problem, N, retraction, rule, ipopt, scheme, backend=backend)
+    solver = Solver(problem, Method(N, scheme=scheme, retraction=retraction, rule=rule),
+                    SolverOptions(backend=backend, ipopt=dict(ipopt or {})))
     tr = solver.transcription
     p = tr.pack()
     T = tr.horizon_of(p)

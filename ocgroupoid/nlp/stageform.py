@@ -30,7 +30,7 @@ import numpy as np
 
 from ..errors import ConfigError
 from .assembly import Block, Kind
-from .schemes.order2 import stage_function
+from .schemes.base import stage_function
 
 
 class NotStaged(ConfigError):

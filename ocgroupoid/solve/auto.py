@@ -36,8 +36,10 @@ from typing import Any, Callable
 
 from ..errors import ConfigError
 from ..model.problem import Problem
-from ..nlp.schemes import DEFAULT_RULE, DEFAULT_SCHEME, SCHEME_NAMES
-from ..nlp.transcription import DEFAULT_BACKEND, MAX_SECONDS
+from ..nlp.method import Method
+from ..nlp.options import SolverOptions
+from ..nlp.schemes import SCHEME_NAMES
+from ..nlp.shortcuts import choose
 from .diagnostics import replay_of
 from .guesses import interpolate
 from .richardson import estimate as richardson_estimate, observed_order
@@ -71,20 +73,17 @@ def check_target(accuracy: float | None, replay_accuracy: float | None) -> None:
 
 @dataclass(frozen=True)
 class Search:
-    """What a search is asked: its targets, its grids, and how each grid is solved."""
+    """What a search is asked: its targets, its grids, and how each grid is solved (the
+    method's retraction, rule and bound points; its N and scheme are the search's; the
+    options' ``max_seconds`` is each grid's)."""
 
     accuracy: float | None
     replay_accuracy: float | None
-    retraction: str
-    rule: str
-    ipopt: dict[str, Any] | None
-    multistart: bool | int
+    method: Method
+    options: SolverOptions
     N_min: int
     N_max: int
     values: dict[str, Any]  # params, initial, final and T of every solve
-    jit: bool = False
-    backend: str = DEFAULT_BACKEND
-    max_seconds: float = MAX_SECONDS  # of each grid's solve
 
     def __post_init__(self) -> None:
         check_target(self.accuracy, self.replay_accuracy)
@@ -189,8 +188,7 @@ def _solve_grid(problem: Problem, scheme: str, N: int, search: Search,
     """One grid: from ``seed`` (the last verified grid, interpolated), or with the
     multi-start when there is none."""
     progress(f"{scheme}, N={N}: building the NLP")
-    solver = Solver(problem, N, search.retraction, search.rule, search.ipopt, scheme,
-                    jit=search.jit, backend=search.backend, max_seconds=search.max_seconds)
+    solver = Solver(problem, replace(search.method, N=N, scheme=scheme), search.options)
     if search.replay_accuracy is not None and replay_of(solver.transcription).rhs is None:
         raise ConfigError(f"replay_accuracy: this problem has no replay "
                           f"({replay_of(solver.transcription).reason}); ask for accuracy "
@@ -200,8 +198,7 @@ def _solve_grid(problem: Problem, scheme: str, N: int, search: Search,
         progress(f"{scheme}, {message}")
 
     if seed is None:
-        return solver, solver.solve(**search.values, multistart=search.multistart,
-                                    progress=where)
+        return solver, solver.solve(**search.values, progress=where)
     guess = interpolate(seed[0].transcription, seed[1].x, seed[1].p, N)
     return solver, solver.solve(**search.values, guess=guess, progress=where)
 
@@ -283,23 +280,25 @@ def _message(run: Run, search: Search, grids: int, seconds: float) -> str:
 
 
 def solve_to_accuracy(problem: Problem, accuracy: float | None = None,
-                      replay_accuracy: float | None = None, scheme: str = DEFAULT_SCHEME,
-                      retraction: str = "cayley", rule: str = DEFAULT_RULE,
-                      ipopt: dict[str, Any] | None = None, multistart: bool | int = False,
+                      replay_accuracy: float | None = None, scheme: str | None = None,
+                      retraction: str | None = None, rule: str | None = None,
+                      ipopt: dict[str, Any] | None = None, multistart: bool | int | None = None,
                       N_min: int = N_MIN, N_max: int = N_MAX, *,
                       params: dict[str, Any] | None = None,
                       initial: dict[str, Any] | None = None,
                       final: dict[str, Any] | None = None, T: float | None = None,
                       progress: Progress | None = None,
-                      report: Callable[[Level], None] | None = None, jit: bool = False,
-                      backend: str = DEFAULT_BACKEND, max_seconds: float = MAX_SECONDS
+                      report: Callable[[Level], None] | None = None, jit: bool | None = None,
+                      backend: str | None = None, max_seconds: float | None = None,
+                      method: Method | None = None, options: SolverOptions | None = None
                       ) -> Solution:
     """Solve on the smallest grid N = N_min 2^k whose estimated error meets ``accuracy``
     (relative cost error) and/or ``replay_accuracy`` (the replay's terminal error); see the
-    module docstring. ``scheme``: one of the schemes, or ``auto``; ``multistart`` as in
-    :meth:`Solver.solve`. ``progress`` hears what runs (a spinner's text); ``report`` gets
-    every grid as it is done; ``jit``, ``backend`` and ``max_seconds`` (of each grid's solve)
-    as in :func:`compile`.
+    module docstring. ``method`` and ``options`` as in :func:`compile` (the method's N is
+    the search's, its scheme too unless ``scheme`` is given: one of the schemes, or
+    ``auto``); the other keywords replace their fields (``multistart``, ``jit``,
+    ``backend``, ``max_seconds`` of each grid's solve, ...). ``progress`` hears what runs (a
+    spinner's text); ``report`` gets every grid as it is done.
 
     >>> sol = solve_to_accuracy(problem, accuracy=1e-6)   # doctest: +SKIP
     >>> sol.N, sol.error_estimate                         # doctest: +SKIP
@@ -307,9 +306,15 @@ def solve_to_accuracy(problem: Problem, accuracy: float | None = None,
     Returns the chosen grid's Solution; if no grid meets the targets, the one nearest them,
     with ``success: false`` and the message (best estimate reached, what to try) as hint.
     """
-    search = Search(accuracy, replay_accuracy, retraction, rule, ipopt, multistart, N_min,
-                    N_max, {"params": params, "initial": initial, "final": final, "T": T},
-                    jit, backend, max_seconds)
+    method, options = choose(method, options, retraction=retraction, rule=rule, ipopt=ipopt,
+                             multistart=multistart, jit=jit, backend=backend,
+                             max_seconds=max_seconds)
+    if options.continuation:
+        raise ConfigError("the accuracy search solves its own grids, each from the one before: "
+                          "give no continuation")
+    scheme = scheme or method.scheme
+    search = Search(accuracy, replay_accuracy, method, options, N_min, N_max,
+                    {"params": params, "initial": initial, "final": final, "T": T})
     if scheme != "auto" and scheme not in SCHEME_NAMES:
         raise ConfigError(f"unknown scheme {scheme!r}; choose one of "
                           f"{', '.join(SCHEME_NAMES)} or auto")

@@ -28,8 +28,10 @@ import numpy as np
 from ..errors import ConfigError
 from ..model.problem import Problem
 from ..nlp.assembly import Kind
-from ..nlp.schemes import DEFAULT_RULE, DEFAULT_SCHEME
-from ..nlp.transcription import Discretization, Transcription
+from ..nlp.method import Method
+from ..nlp.options import SolverOptions
+from ..nlp.shortcuts import choose
+from ..nlp.transcription import Transcription
 from .dependencies import dependent_conditions
 from .guesses import geodesic_guesses, perturbed_guesses
 
@@ -115,20 +117,24 @@ def redundant_rows(tr: Transcription, tol: float = 1e-9) -> list[str]:
     return found
 
 
-def check(problem: Problem, N: int, retraction: str = "cayley", rule: str = DEFAULT_RULE,
-          ipopt: dict[str, Any] | None = None, scheme: str = DEFAULT_SCHEME,
-          steps: str = "uniform") -> CheckReport:
-    """Build the NLP at the file's N (dimensions) and at a small N (redundancy test)."""
-    disc = Discretization(N, retraction, rule, scheme, steps)
-    capped = {**(ipopt or {}), "max_iter": SMALL_ITER}  # the one solve: implied_conditions
-    tr = Transcription(problem, disc, capped)
+def check(problem: Problem, method: Method | int | None = None,
+          options: SolverOptions | str | None = None, *positional: Any,
+          **keywords: Any) -> CheckReport:
+    """Build the NLP with ``method`` (dimensions) and at a small N (redundancy test);
+    ``method`` and ``options`` as in :func:`~ocgroupoid.solve.entry.compile`, of which the
+    test reads the IPOPT options (it builds IPOPT, without jit)."""
+    method, options = choose(method, options, *positional, **keywords)
+    # the one solve (implied_conditions) stops early
+    capped = SolverOptions(ipopt={**options.ipopt, "max_iter": SMALL_ITER})
+    tr = Transcription(problem, method, capped)
     blocks: dict[str, int] = {}
     for b in tr.blocks:
         key = "final conditions" if b.kind is Kind.FINAL_CONDITION else b.kind.value
         blocks[key] = blocks.get(key, 0) + b.m * b.ncols
     given, free = boundary_lists(tr)
     n_eq = len(equality_rows(tr, tr.pack()))
-    small = tr if N <= SMALL_N else Transcription(problem, replace(disc, N=SMALL_N), capped)
+    small = tr if method.N <= SMALL_N else \
+        Transcription(problem, replace(method, N=SMALL_N), capped)
     return CheckReport(tr.nx, blocks, tr.nx - n_eq, tr.ng - n_eq, given, free,
                        redundant_rows(small) or implied_conditions(small))
 

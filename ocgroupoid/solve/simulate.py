@@ -42,6 +42,7 @@ from ..errors import ConfigError, DimensionError, SolverError
 from ..model.problem import Problem
 from ..nlp import dynamics
 from ..nlp.dynamics import Dynamics
+from ..nlp.method import DEFAULT_RETRACTION
 from ..nlp.schemes import DEFAULT_RULE, NodeMidpoint
 
 #: steps per compiled call: failures and progress are checked between calls
@@ -279,7 +280,7 @@ class Simulation:
 
 def simulate(problem: Problem, h: float = 0.01, steps: int = 1000,
              initial: dict[str, Any] | None = None, controls: Any = None,
-             retraction: str = "cayley", rule: str = DEFAULT_RULE,
+             retraction: str = DEFAULT_RETRACTION, rule: str = DEFAULT_RULE,
              params: dict[str, Any] | None = None, progress: bool | None = None
              ) -> Simulation:
     """Simulate a second-order problem forward over ``steps`` steps of length ``h`` with its

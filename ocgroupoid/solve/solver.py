@@ -9,7 +9,6 @@ first and interpolates each solution onto the next grid as its initial guess.
 
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass, replace
 from typing import Any, Callable, Iterable, Sequence
@@ -18,16 +17,12 @@ import numpy as np
 
 from ..errors import ConfigError
 from ..model.problem import Problem
-from ..nlp.fatrop import TIMED_OUT
-from ..nlp.schemes import DEFAULT_RULE, DEFAULT_SCHEME
-from ..nlp.transcription import (
-    DEFAULT_BACKEND,
-    MAX_SECONDS,
-    Discretization,
-    Guess,
-    RawResult,
-    Transcription,
-)
+from ..nlp.backends import TIMED_OUT
+from ..nlp.method import Discretization, Method
+from ..nlp.options import SolverOptions
+from ..nlp.program import Guess
+from ..nlp.shortcuts import choose
+from ..nlp.transcription import RawResult, Transcription
 from ..nlp.watch import Listener
 from . import mesh, richardson
 from .diagnostics import replay_of
@@ -97,6 +92,11 @@ def distinct_minima(results: Iterable[RawResult], rtol: float = 1e-6, xtol: floa
 class Solver:
     """A compiled problem: build once, solve for any parameters, boundary values and T.
 
+    ``Solver(problem, method, options)`` with an :class:`~ocgroupoid.nlp.method.Method` and
+    :class:`~ocgroupoid.nlp.options.SolverOptions` (default: every default), their fields
+    replaceable by keywords (``Solver(problem, N=32, backend="fatrop")``,
+    :func:`~ocgroupoid.nlp.shortcuts.choose`).
+
     ``max_seconds`` bounds the wall time of one :meth:`solve` (every start and grid): a start
     past it is stopped (IPOPT at its next iteration, fatrop's helper process at once,
     :mod:`~ocgroupoid.nlp.isolated`) with status ``Maximum_WallTime_Exceeded``, the starts
@@ -106,20 +106,15 @@ class Solver:
     >>> sol = solver.solve(params={"inertia": [2, 1, 1]})  # doctest: +SKIP
     """
 
-    def __init__(self, problem: Problem, N: int, retraction: str = "cayley",
-                 rule: str = DEFAULT_RULE, ipopt: dict[str, Any] | None = None,
-                 scheme: str = DEFAULT_SCHEME, steps: str = "uniform", jit: bool = False,
-                 backend: str = DEFAULT_BACKEND, max_seconds: float = MAX_SECONDS, *,
-                 bound_points: int = 0) -> None:
-        self.problem = problem
-        self.ipopt = dict(ipopt or {})
-        self.jit, self.backend = jit, backend
-        self.max_seconds = check_seconds(max_seconds)
-        # each IPOPT run within the solve's limit too (unless the options say otherwise)
-        self._run_options = {"max_wall_time": self.max_seconds, **self.ipopt}
-        self.disc = Discretization(N, retraction, rule, scheme, steps,
-                                   bound_points=bound_points)
-        self.transcription = Transcription(problem, self.disc, self._run_options, jit, backend)
+    def __init__(self, problem: Problem, method: Method | int | None = None,
+                 options: SolverOptions | str | None = None, *positional: Any,
+                 **keywords: Any) -> None:
+        method, options = choose(method, options, *positional, **keywords)
+        self.problem, self.options = problem, options
+        self.ipopt = options.ipopt
+        self.max_seconds = options.max_seconds
+        self.disc = Discretization.of(method)
+        self.transcription = Transcription(problem, self.disc, options)
         self._coarse: dict[int, Transcription] = {}
         self._phased: dict[tuple[Any, ...], Transcription] = {}
 
@@ -127,9 +122,7 @@ class Solver:
         if N == self.disc.N:
             return self.transcription
         if N not in self._coarse:
-            disc = replace(self.disc, N=N)
-            self._coarse[N] = Transcription(self.problem, disc, self._run_options, self.jit,
-                                            self.backend)
+            self._coarse[N] = Transcription(self.problem, replace(self.disc, N=N), self.options)
         return self._coarse[N]
 
     def guesses(self, tr: Transcription, p: np.ndarray, multistart: bool | int) -> list[Guess]:
@@ -144,7 +137,7 @@ class Solver:
 
     def solve(self, params: dict[str, Any] | None = None, initial: dict[str, Any] | None = None,
               final: dict[str, Any] | None = None, T: float | None = None,
-              multistart: bool | int = False, continuation: Sequence[int] | None = None,
+              multistart: bool | int | None = None, continuation: Sequence[int] | None = None,
               guess: Guess | Solution | np.ndarray | None = None, replay: bool = True,
               progress: Progress = _noop,
               replay_tolerance: float = REPLAY_TOLERANCE, warm: Solution | None = None
@@ -154,10 +147,11 @@ class Solver:
 
         ``multistart``: True (every geodesic guess, the model's guesses and 3 perturbations;
         a further start gets :data:`START_BUDGET` iterations; the default of problem files
-        and the CLI), False (the first geodesic only; the default here, which the exported
-        C solver shares) or the number of perturbed starts. ``continuation``: coarser N
-        solved first, in order; the last of them gives the Solution a Richardson estimate of
-        its cost error (:attr:`Solution.error_estimate`). ``replay``: drive the controls
+        and the CLI), False (the first geodesic only; the default of the options, which the
+        exported C solver shares) or the number of perturbed starts. ``continuation``:
+        coarser N solved first, in order; the last of them gives the Solution a Richardson
+        estimate of its cost error (:attr:`Solution.error_estimate`); both default to the
+        solver options'. ``replay``: drive the controls
         through the continuous dynamics (a few ms; it decides whether the plan lands,
         ``replay_tolerance``). ``progress`` hears each start and, every 0.25 s, IPOPT's
         iteration. Ctrl-C stops the solve with the best point so far, ``status: interrupted``.
@@ -168,6 +162,10 @@ class Solver:
         primal and dual (IPOPT's warm start), for re-solves with new parameters or boundary
         values; one start, no continuation.
         """
+        if multistart is None:
+            multistart = self.options.multistart
+        if continuation is None:
+            continuation = self.options.continuation
         if warm is not None:
             if warm.x.size != self.transcription.nx or warm.lam_g.size != self.transcription.ng:
                 raise ConfigError(
@@ -307,9 +305,7 @@ class Solver:
             key = (phases, held)
             if key not in self._phased:
                 self._phased[key] = Transcription(
-                    self.problem, replace(self.disc, phases=phases, active=held),
-                    self._run_options,
-                    self.jit, self.backend)
+                    self.problem, replace(self.disc, phases=phases, active=held), self.options)
             phased = self._phased[key]
             p = phased.pack(params, initial, final, src[0].horizon(src[1].x, src[1].p))
             result = phased.solve(interpolate(src[0], src[1].x, src[1].p, self.disc.N), p)
@@ -368,35 +364,3 @@ def _higher(fine: RawResult, coarse: RawResult, gap: float) -> bool:
     if not fine.success:
         return True
     return fine.cost > coarse.cost + gap * max(abs(coarse.cost), 1e-12)
-
-
-def compile(problem: Problem, N: int = 64, retraction: str = "cayley", rule: str = DEFAULT_RULE,
-            ipopt: dict[str, Any] | None = None, scheme: str = DEFAULT_SCHEME,
-            steps: str = "uniform", jit: bool = False, backend: str = DEFAULT_BACKEND,
-            max_seconds: float = MAX_SECONDS, *, bound_points: int = 0) -> Solver:
-    """Build the NLP of ``problem`` on N intervals once; see :class:`Solver`. ``steps``:
-    ``uniform`` (h = T/N) or ``adaptive`` (one step per interval, summing to T); ``jit``:
-    evaluate the NLP's Functions as compiled C (:mod:`~ocgroupoid.nlp.jit`); ``backend``:
-    ``ipopt`` or ``fatrop`` (the stage form, :mod:`~ocgroupoid.nlp.fatrop`); ``max_seconds``:
-    the wall time of one solve, every start and grid together; ``bound_points``: the bounds
-    at this many more points inside every interval (order4)."""
-    return Solver(problem, N, retraction, rule, ipopt, scheme, steps, jit, backend, max_seconds,
-                  bound_points=bound_points)
-
-
-def solve(problem: Problem, N: int = 64, retraction: str = "cayley", rule: str = DEFAULT_RULE,
-          ipopt: dict[str, Any] | None = None, scheme: str = DEFAULT_SCHEME,
-          steps: str = "uniform", jit: bool = False, backend: str = DEFAULT_BACKEND,
-          max_seconds: float = MAX_SECONDS, bound_points: int = 0, **kwargs: Any) -> Solution:
-    """Build and solve in one call; ``kwargs`` go to :meth:`Solver.solve`."""
-    return compile(problem, N, retraction, rule, ipopt, scheme, steps, jit, backend,
-                   max_seconds, bound_points=bound_points).solve(**kwargs)
-
-
-def check_seconds(seconds: Any, what: str = "max_seconds") -> float:
-    """A wall-time limit: a finite number of seconds > 0."""
-    if isinstance(seconds, bool) or not isinstance(seconds, (int, float)) or \
-            not math.isfinite(seconds) or seconds <= 0:
-        raise ConfigError(f"{what} must be a finite number of seconds > 0, got {seconds!r}; "
-                          f"e.g. {MAX_SECONDS:g}")
-    return float(seconds)

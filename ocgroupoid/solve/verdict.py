@@ -39,7 +39,8 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from ..nlp.transcription import DEFAULT_IPOPT, RawResult, Transcription
+from ..nlp.backends import DEFAULT_IPOPT
+from ..nlp.transcription import RawResult, Transcription
 from .dependencies import dependent_conditions
 from .replay import terminal_errors
 

@@ -24,7 +24,8 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from ..nlp.transcription import READOUT_OUTPUTS, Transcription
+from ..nlp.program import READOUT_OUTPUTS
+from ..nlp.transcription import Transcription
 from .replay import Replay
 from .verdict import FLOOR
 

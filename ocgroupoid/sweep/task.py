@@ -7,7 +7,7 @@ the NLP only if this process has not built it already; every point is solved thr
 Warm starts (``warm``): the points of a chunk are solved in sweep order, and a point whose
 grid neighbour (one step back or forward along one axis, same random sample) was solved
 successfully in this chunk may start from that solution: its point and multipliers (IPOPT's
-primal-dual warm start, :attr:`~ocgroupoid.nlp.transcription.Transcription.warm_solver`).
+primal-dual warm start, :attr:`~ocgroupoid.nlp.backends.ipopt.IpoptBackend.warm_solver`).
 ``"fallback"`` (the default) starts cold (the geodesic guess, or the file's multi-start and
 continuation) and tries the neighbour only when the cold start fails, so a point that solves
 cold gives exactly the result of solving it alone, whatever the chunking. ``"first"`` tries
@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import time
 from collections import OrderedDict
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any, Literal
 
 from ..errors import BoundaryError, ConfigError
@@ -95,10 +95,10 @@ def solver_for(structure: str, pb: Problem, cfg: Config, args: dict[str, Any]
     if f.horizon.N == "auto":  # a grid search per point is not a sweep's compiled NLP
         raise ConfigError("horizon.N: auto searches N point by point, which a sweep does not "
                           "do: give an integer N (or sweep over horizon.N)")
-    # the discretization section's keys (scheme, retraction, rule, ...) are compile()'s
-    solver = compile(pb, f.horizon.N, ipopt=f.solver.ipopt, jit=f.solver.jit,
-                     backend=f.solver.backend, max_seconds=f.solver.max_seconds,
-                     **f.discretization.model_dump())
+    from ..files.solving import method, options
+
+    # the file's method and options; multi-start and continuation are each attempt's own
+    solver = compile(pb, method(cfg), replace(options(cfg), multistart=False, continuation=()))
     _solvers[structure] = solver
     _solvers.move_to_end(structure)
     while len(_solvers) > CACHE_SIZE:

@@ -4,9 +4,10 @@ from __future__ import annotations
 
 from ...errors import ConfigError
 from ...model.problem import Problem
-from .base import Readout, Scheme
-from .order2 import DEFAULT_RULE, IntervalMidpoint, Node, NodeMidpoint
-from .order4 import GaussStages, QuadraticGauss
+from .base import DEFAULT_RULE, Readout, Scheme
+from .gauss_stages import GaussStages
+from .order2 import IntervalMidpoint, Node, NodeMidpoint
+from .order4 import QuadraticGauss
 from .shooting import RK4Euler, RK4Matrix, RK4Quaternion
 
 #: scheme name -> problem order (1 or 2) -> class

@@ -25,7 +25,7 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
-from typing import Callable, ClassVar
+from typing import Any, Callable, ClassVar
 
 import casadi as ca
 import numpy as np
@@ -37,6 +37,22 @@ from ..layout import Layout
 from ..stages import Stages
 
 Pick = Callable[[np.ndarray], ca.MX]  # w-indices -> the gathered graph, shaped like them
+#: the rule of the constraints every scheme has (order2 also takes a problem's own ``rules``)
+DEFAULT_RULE = "midpoint"
+
+
+def stage_function(name: str, sizes: list[int], body: Callable[..., Any]) -> ca.Function:
+    """``name(z) -> (f, g)`` with z the concatenation of arguments of the given sizes."""
+    z = ca.SX.sym("z", sum(sizes))
+    parts = ca.vertsplit(z, np.cumsum([0, *sizes]).tolist())
+    f, g = body(*parts)
+    return ca.Function(name, [z], [f, g])
+
+
+def columns(*parts: np.ndarray, ncols: int) -> np.ndarray:
+    """Stack index rows; 1-D parts (T, P) are repeated for every column."""
+    rows = [np.tile(p[:, None], (1, ncols)) if p.ndim == 1 else p for p in parts]
+    return np.vstack(rows).astype(np.int64)
 
 
 @dataclass

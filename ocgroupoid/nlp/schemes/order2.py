@@ -22,7 +22,7 @@ the midpoint ``q_{k+1/2} = base(step(s_k, tau(h xi_k/2)))`` and ``phi_d = h psi(
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -32,9 +32,7 @@ from ...lie.retraction import Retraction
 from ...model.problem import Problem
 from ..assembly import Block, Kind
 from ..layout import Layout
-from .base import Pick, Readout, Scheme, piecewise_linear
-
-DEFAULT_RULE = "midpoint"
+from .base import DEFAULT_RULE, Pick, Readout, Scheme, columns, piecewise_linear, stage_function
 
 
 @dataclass
@@ -69,20 +67,6 @@ class Node:
             old.append(pb.U)
             new.append(self.u)
         return ca.substitute([expr], old, new)[0]
-
-
-def stage_function(name: str, sizes: list[int], body: Callable[..., Any]) -> ca.Function:
-    """``name(z) -> (f, g)`` with z the concatenation of arguments of the given sizes."""
-    z = ca.SX.sym("z", sum(sizes))
-    parts = ca.vertsplit(z, np.cumsum([0, *sizes]).tolist())
-    f, g = body(*parts)
-    return ca.Function(name, [z], [f, g])
-
-
-def columns(*parts: np.ndarray, ncols: int) -> np.ndarray:
-    """Stack index rows; 1-D parts (T, P) are repeated for every column."""
-    rows = [np.tile(p[:, None], (1, ncols)) if p.ndim == 1 else p for p in parts]
-    return np.vstack(rows).astype(np.int64)
 
 
 class IntervalVelocities(Scheme):

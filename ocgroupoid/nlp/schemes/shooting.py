@@ -30,9 +30,8 @@ from ...model.problem import Problem
 from ..assembly import Block, Kind
 from ..dynamics import Dynamics, rk4
 from ..layout import Layout
-from .base import Pick, Readout, Scheme
+from .base import DEFAULT_RULE, Pick, Readout, Scheme, columns, stage_function
 from .coordinates import Coordinates, coordinates
-from .order2 import DEFAULT_RULE, columns, stage_function
 
 
 class RK4Shooting(Scheme):

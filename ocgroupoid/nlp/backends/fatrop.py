@@ -18,17 +18,19 @@ NaN evaluations, or on Ctrl-C.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any
 
 import casadi as ca
 import numpy as np
 
-from ..errors import ConfigError
-from .assembly import Block, assemble
-from .isolated import NAN_LIMIT, Isolated, Stopped
-from .jit import compiled
-from .stageform import NotStaged, StageForm, stage_form
+from ...errors import ConfigError
+from ..assembly import assemble
+from ..isolated import NAN_LIMIT, Isolated, Stopped
+from ..jit import compiled
+from ..options import SolverOptions
+from ..stageform import NotStaged, StageForm, stage_form
+from .base import INTERRUPTED, TIMED_OUT, Backend, Graph, Run, Start
+from .ipopt import ipopt_options
 
 #: IPOPT options fatrop also has; the others do not apply to it
 SHARED_OPTIONS = ("tol", "max_iter", "mu_init", "bound_push", "bound_frac", "constr_viol_tol",
@@ -39,9 +41,6 @@ SHARED_OPTIONS = ("tol", "max_iter", "mu_init", "bound_push", "bound_frac", "con
 RENAMED_OPTIONS = {"constr_mult_init_max": "lam_max"}
 #: what a failed fatrop solve reports (its return flag is 1 for every failure)
 FAILED = "Fatrop_Failed"
-#: what a solve reports that was stopped at its deadline (IPOPT's name for it) or by Ctrl-C
-TIMED_OUT = "Maximum_WallTime_Exceeded"
-INTERRUPTED = "interrupted"
 #: fatrop relaxes every inequality bound by this factor, as IPOPT's default
 #: ``bound_relax_factor`` (``lb - eps max(1, |lb|)``), and has no option to turn it off: the
 #: bounds it is given are tightened by as much, so that they hold at the solution to
@@ -65,22 +64,6 @@ def tightened(bounds: ca.Function) -> ca.Function:
         out.append(ca.if_else(moved * finite_lo, ca.if_else(cross, mid, lo), lb))
         out.append(ca.if_else(moved * finite_up, ca.if_else(cross, mid, up), ub))
     return ca.Function("fatrop_bounds", [p], out, ["p"], ["lbg", "ubg", "lbx", "ubx"])
-
-
-@dataclass
-class FatropResult:
-    """A solve in the original variables and rows (``note``: why it was stopped, if it
-    was)."""
-
-    x: np.ndarray
-    f: float
-    lam_g: np.ndarray
-    lam_x: np.ndarray
-    status: str
-    success: bool
-    iterations: int
-    seconds: float
-    note: str = ""
 
 
 def _functions(sf: StageForm, np_: int) -> tuple[dict[str, Any], dict[str, ca.Function]]:
@@ -107,20 +90,24 @@ def _functions(sf: StageForm, np_: int) -> tuple[dict[str, Any], dict[str, ca.Fu
     return {"x": z, "p": p, "f": fns["f"], "g": g}, functions
 
 
-class FatropNLP:
+class FatropBackend(Backend):
     """The fatrop instance of a block NLP over ``w = [x; p]``, solved in the original
-    variables: points, bounds and multipliers are mapped in and out (:class:`StageForm`)."""
+    variables: points, bounds and multipliers are mapped in and out (:class:`StageForm`);
+    ``jit`` compiles its Functions."""
 
-    def __init__(self, name: str, blocks: list[Block], nx: int, np_: int,
-                 bounds: ca.Function, ipopt: dict[str, Any], jit: bool = False) -> None:
+    name = "fatrop"
+
+    def __init__(self, nlp: Graph, options: SolverOptions, jit: bool = False) -> None:
+        t0 = time.perf_counter()
+        name, ipopt = nlp.function_name, ipopt_options(options)
         try:
-            self.form = stage_form(blocks, nx)
+            self.form = stage_form(nlp.blocks, nlp.nx)
         except NotStaged as err:
             raise ConfigError(f"solver.backend fatrop needs the NLP as a chain of stages, and "
                               f"this one is not ({err}); use solver.backend: ipopt") from None
-        nlp, functions = _functions(self.form, np_)
+        graph, functions = _functions(self.form, nlp.np)
         #: the bounds fatrop is given (:func:`tightened`)
-        self.bounds = tightened(bounds)
+        self.bounds = tightened(nlp.bounds_function)
         self.max_iter = int(ipopt.get("max_iter", 3000))
         self.jit_compiled = False
         if jit:
@@ -134,11 +121,13 @@ class FatropNLP:
                                    **{RENAMED_OPTIONS[k]: v for k, v in ipopt.items()
                                       if k in RENAMED_OPTIONS}}}
         try:
-            self.solver = ca.nlpsol(name, "fatrop", nlp, self.options)
+            self.solver = ca.nlpsol(name, "fatrop", graph, self.options)
         except RuntimeError as err:
             raise ConfigError(f"fatrop rejected the NLP or its options: {err}; use "
                               "solver.backend: ipopt") from None
         self._isolated = Isolated(self._solve_here)
+        #: the time the build took (stage form, Functions, jit, nlpsol)
+        self.build_seconds = time.perf_counter() - t0
 
     def arguments(self, x0: Any, p: Any) -> dict[str, Any]:
         """The solver's inputs in stage form, for an original point x0 and parameters p (numbers,
@@ -149,13 +138,15 @@ class FatropNLP:
         return {"x0": sf.z_of(x0), "p": p, "lbg": sf.rows_z(lbg), "ubg": sf.rows_z(ubg),
                 "lbx": lbz, "ubx": ubz}
 
-    def solve(self, x0: np.ndarray, p: np.ndarray, seconds: float = float("inf"),
-              stop: Callable[[], bool] = lambda: False) -> FatropResult:
-        """Run fatrop from the original point x0, in the helper process, for at most
-        ``seconds`` (status :data:`TIMED_OUT`), stopped after repeated NaN evaluations
-        (:data:`FAILED`, with a note) or once ``stop()`` is true (:data:`INTERRUPTED`)."""
+    def run(self, start: Start) -> Run:
+        """Run fatrop from the primal point of ``start`` (its multipliers and listener are
+        not for fatrop), in the helper process, until its deadline (status
+        :data:`TIMED_OUT`), stopped after repeated NaN evaluations (:data:`FAILED`, with a
+        note) or once ``start.stop()`` is true (:data:`INTERRUPTED`)."""
+        x0, p = start.x0, start.p
+        seconds = start.deadline - time.monotonic()
         t0 = time.perf_counter()
-        answer = self._isolated.call((x0, p), seconds, stop)
+        answer = self._isolated.call((x0, p), seconds, start.stop)
         if isinstance(answer, Stopped):
             status, note = {
                 "time": (TIMED_OUT, f"fatrop stopped at the time limit ({seconds:.3g} s)"),
@@ -163,12 +154,12 @@ class FatropNLP:
                 "stop": (INTERRUPTED, "fatrop stopped by an interrupt"),
             }.get(answer.reason, (FAILED, f"fatrop's process died ({answer.detail})"))
             nx = np.size(x0)
-            return FatropResult(np.asarray(x0, dtype=float), float("nan"),
+            return Run(np.asarray(x0, dtype=float), float("nan"),
                                 np.zeros(self.form.n_rows), np.zeros(nx), status, False,
                                 0, time.perf_counter() - t0, note)
         return answer
 
-    def _solve_here(self, request: tuple[np.ndarray, np.ndarray]) -> FatropResult:
+    def _solve_here(self, request: tuple[np.ndarray, np.ndarray]) -> Run:
         """The solve itself (run by the helper process)."""
         x0, p = request
         sf = self.form
@@ -180,13 +171,14 @@ class FatropNLP:
         success, iterations = bool(stats["success"]), int(stats["iter_count"])
         status = "Solve_Succeeded" if success else \
             "Maximum_Iterations_Exceeded" if iterations >= self.max_iter else FAILED
-        return FatropResult(sf.x_of(np.array(r["x"])), float(r["f"]),
+        return Run(sf.x_of(np.array(r["x"])), float(r["f"]),
                             sf.rows_x(np.array(r["lam_g"])), sf.x_of(np.array(r["lam_x"])),
                             status, success, iterations, seconds)
 
-    def graph(self, x0: ca.MX, p: ca.MX) -> dict[str, ca.MX]:
+    def graph(self, x0: ca.MX, p: ca.MX, lam_g0: ca.MX | None = None,
+              lam_x0: ca.MX | None = None) -> dict[str, Any]:
         """The same solve as a graph in the original variables (the exported solver):
-        ``x, f, g, lam_g, lam_x``."""
+        ``x, f, g, lam_g, lam_x``; fatrop has no dual warm start and starts from x0."""
         sf = self.form
         r = self.solver(**self.arguments(x0, p))
         return {"x": sf.x_of(r["x"]), "f": r["f"], "g": sf.rows_x(r["g"]),

@@ -1,0 +1,141 @@
+"""``solver.backend: ipopt``: IPOPT on the whole sparse KKT system (MUMPS), through
+``casadi.nlpsol``, with the stage-wise assembled derivatives in its cache.
+
+Three instances of the one NLP, the last two built on first use: the plain solver (free of
+Python: the exported C solver calls it), one with an iteration callback
+(:mod:`~ocgroupoid.nlp.watch`: progress and Ctrl-C) and one started from a primal-dual point
+(IPOPT's ``warm_start_init_point``).
+"""
+
+from __future__ import annotations
+
+import time
+from functools import cached_property
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from ...errors import ConfigError
+from ..jit import compiled
+from ..options import MAX_SECONDS, SolverOptions
+from ..watch import Watch
+from .base import Backend, Graph, Run, Start
+
+DEFAULT_IPOPT: dict[str, Any] = {
+    "tol": 1e-10,
+    "max_wall_time": MAX_SECONDS,
+    "constr_mult_init_max": 0.0,  # start from zero multipliers: saves a factorisation
+    "max_iter": 500,
+    # a start that wanders off (|x| > 1e8: no physical velocity or state) stops at once as
+    # Diverging_Iterates; left to run, MUMPS grows its workspace each iteration and one bad
+    # start of a multi-start took minutes (heavy top, N=256, "long way" guess)
+    "diverging_iterates_tol": 1e8,
+    # bounds hold exactly at the solution (IPOPT relaxes them by 1e-8 by default); equality
+    # constraints are never relaxed, so problems without bounds are unaffected
+    "bound_relax_factor": 0.0,
+    "print_level": 0,
+    "sb": "yes",
+}
+
+#: IPOPT options of a primal-dual warm start (:attr:`IpoptBackend.warm_solver`)
+WARM_IPOPT: dict[str, Any] = {
+    "ipopt.warm_start_init_point": "yes", "ipopt.warm_start_bound_push": 1e-9,
+    "ipopt.warm_start_slack_bound_push": 1e-9, "ipopt.warm_start_mult_bound_push": 1e-9,
+    "ipopt.mu_init": 1e-6}
+
+
+def ipopt_options(options: SolverOptions) -> dict[str, Any]:
+    """IPOPT's options of each run: :data:`DEFAULT_IPOPT` overridden by the solve's
+    (:attr:`SolverOptions.run_ipopt`)."""
+    return {**DEFAULT_IPOPT, **options.run_ipopt}
+
+
+def nlpsol_options(ipopt: dict[str, Any] | None, fns: dict[str, ca.Function]) -> dict[str, Any]:
+    """Options of ``casadi.nlpsol``: IPOPT's (defaults overridden by ``ipopt``) and the
+    assembled derivative functions in its cache, so that it derives none itself."""
+    opts: dict[str, Any] = {f"ipopt.{k}": v for k, v in {**DEFAULT_IPOPT, **(ipopt or {})}.items()}
+    opts.update({"print_time": False, "calc_lam_p": False, "show_eval_warnings": False,
+                 "cache": {k: fns[k] for k in ("nlp_grad_f", "nlp_jac_g", "nlp_hess_l")}})
+    return opts
+
+
+class IpoptBackend(Backend):
+    """IPOPT for one NLP (module docstring); ``jit`` compiles its Functions."""
+
+    name = "ipopt"
+
+    def __init__(self, nlp: Graph, options: SolverOptions, jit: bool = False) -> None:
+        self.nx, self.ng, self.np = nlp.nx, nlp.ng, nlp.np
+        self.function_name, self.nlp, self.bounds = \
+            nlp.function_name, nlp.nlp, nlp.bounds_function
+        fns = dict(nlp.functions)
+        self.options = nlpsol_options(options.run_ipopt, fns)
+        t0 = time.perf_counter()
+        if jit:
+            x, p = self.nlp["x"], self.nlp["p"]
+            fns["nlp_f"] = ca.Function("nlp_f", [x, p], [self.nlp["f"]], ["x", "p"], ["f"])
+            fns["nlp_g"] = ca.Function("nlp_g", [x, p], [self.nlp["g"]], ["x", "p"], ["g"])
+            self.options["cache"], self.jit_compiled = compiled(fns)
+        #: the compilation of jit (or the load from its cache)
+        self.jit_seconds = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        self._watch: Watch | None = None
+        try:
+            #: the plain IPOPT instance (no Python inside: the exported C solver's)
+            self.solver = ca.nlpsol(self.function_name, "ipopt", self.nlp, self.options)
+        except RuntimeError as err:
+            raise ConfigError(f"IPOPT rejected the options {options.run_ipopt}: {err}") \
+                from None
+        #: the time nlpsol took to set IPOPT up
+        self.setup_seconds = time.perf_counter() - t0
+
+    @cached_property
+    def watched_solver(self) -> ca.Function:
+        """:attr:`solver` with an iteration callback (:mod:`~ocgroupoid.nlp.watch`), built on
+        first use (the plain :attr:`solver` stays free of Python, for the C export)."""
+        self._watch = Watch(self.nx, self.ng, self.np)
+        return ca.nlpsol(self.function_name, "ipopt", self.nlp,
+                         {**self.options, "iteration_callback": self._watch})
+
+    @cached_property
+    def warm_solver(self) -> ca.Function:
+        """:attr:`solver` started from a given primal-dual point (IPOPT's
+        ``warm_start_init_point``, its bound pushes small and mu_init low, so that a point
+        near the solution stays near it), built on first use."""
+        return ca.nlpsol(self.function_name, "ipopt", self.nlp, {**self.options, **WARM_IPOPT})
+
+    def run(self, start: Start) -> Run:
+        """IPOPT from ``start``: the warm solver when it carries multipliers, else the
+        watched one when someone listens, else the plain one. Its deadline is IPOPT's own
+        ``max_wall_time`` and the listener's (which stops IPOPT by returning True)."""
+        lbg, ubg, lbx, ubx = self.bounds(start.p)
+        solver = self.solver
+        duals: dict[str, np.ndarray] = {}
+        if start.lam_g0 is not None and start.lam_x0 is not None:
+            solver, duals = self.warm_solver, {"lam_g0": start.lam_g0, "lam_x0": start.lam_x0}
+        elif start.listener is not None:
+            solver = self.watched_solver
+            assert self._watch is not None
+            self._watch.start(start.listener, np.array(lbg).ravel(), np.array(ubg).ravel())
+        t0 = time.perf_counter()
+        r = solver(x0=start.x0, p=start.p, lbg=lbg, ubg=ubg, lbx=lbx, ubx=ubx, **duals)
+        seconds = time.perf_counter() - t0
+        stats = solver.stats()
+        status = str(stats["return_status"])
+        iterations = 0 if status == "Not_Enough_Degrees_Of_Freedom" else int(stats["iter_count"])
+        return Run(np.array(r["x"]).ravel(), float(r["f"]), np.array(r["lam_g"]).ravel(),
+                   np.array(r["lam_x"]).ravel(), status, bool(stats["success"]), iterations,
+                   seconds)
+
+    def graph(self, x0: ca.MX, p: ca.MX, lam_g0: ca.MX | None = None,
+              lam_x0: ca.MX | None = None) -> dict[str, Any]:
+        """The solve from x0 as a graph, with the bounds of p; with multipliers, IPOPT's
+        primal-dual warm start (:attr:`warm_solver`)."""
+        lbg, ubg, lbx, ubx = self.bounds(p)
+        duals: dict[str, ca.MX] = {}
+        if lam_g0 is not None and lam_x0 is not None:
+            duals = {"lam_g0": lam_g0, "lam_x0": lam_x0}
+        solver = self.warm_solver if duals else self.solver
+        r = solver(x0=x0, p=p, lbg=lbg, ubg=ubg, lbx=lbx, ubx=ubx, **duals)
+        return {k: r[k] for k in ("x", "f", "g", "lam_g", "lam_x")}

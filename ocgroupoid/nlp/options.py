@@ -1,0 +1,95 @@
+"""How an NLP is solved: the solver options, one object.
+
+acados keeps what is solved (``AcadosOcp``) apart from how (its ``solver_options``); here
+``og.SolverOptions(backend="fatrop", jit=True, multistart=True)``. It is validated once,
+when it is made, and passed whole to everything that solves. Every default of a solve is
+here (IPOPT's own option values are the IPOPT backend's,
+:data:`~ocgroupoid.nlp.backends.ipopt.DEFAULT_IPOPT`; problem files start several starts by
+default, :mod:`~ocgroupoid.files.schema`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, fields
+from numbers import Integral
+from typing import Any
+
+from ..errors import ConfigError
+
+#: the wall time one solve may take (seconds, ``solver.max_seconds``): IPOPT's
+#: ``max_wall_time`` for each of its runs, and the deadline of a fatrop run
+#: (:mod:`~ocgroupoid.nlp.isolated`); :class:`~ocgroupoid.solve.Solver` holds every start of
+#: one solve to it together
+MAX_SECONDS = 600.0
+#: the NLP solvers: IPOPT on the whole sparse KKT system (MUMPS), or fatrop on the stage form
+#: (:mod:`~ocgroupoid.nlp.backends.fatrop`)
+BACKENDS = ("ipopt", "fatrop")
+DEFAULT_BACKEND = "ipopt"
+#: the starts of a solve: the first geodesic guess only (the exported C solver's too)
+DEFAULT_MULTISTART = False
+
+
+def check_seconds(seconds: Any, what: str = "max_seconds") -> float:
+    """A wall-time limit: a finite number of seconds > 0."""
+    if isinstance(seconds, bool) or not isinstance(seconds, (int, float)) or \
+            not math.isfinite(seconds) or seconds <= 0:
+        raise ConfigError(f"{what} must be a finite number of seconds > 0, got {seconds!r}; "
+                          f"e.g. {MAX_SECONDS:g}")
+    return float(seconds)
+
+
+@dataclass(frozen=True, kw_only=True)
+class SolverOptions:
+    """The backend and its options, compiled evaluation, the time limit of one solve and the
+    globalisation (multi-start, continuation).
+
+    >>> SolverOptions(backend="fatrop", ipopt={"tol": 1e-8})   # doctest: +SKIP
+    """
+
+    #: ``ipopt`` or ``fatrop`` (:data:`BACKENDS`)
+    backend: str = DEFAULT_BACKEND
+    #: IPOPT's options over :data:`~ocgroupoid.nlp.backends.ipopt.DEFAULT_IPOPT` (fatrop
+    #: reads the ones it shares)
+    ipopt: dict[str, Any] = field(default_factory=dict)
+    #: evaluate the NLP's Functions as compiled C (:mod:`~ocgroupoid.nlp.jit`)
+    jit: bool = False
+    #: the wall time of one solve, every start and grid together
+    max_seconds: float = MAX_SECONDS
+    #: True (every geodesic guess, the model's and 3 perturbed starts), False (the first
+    #: geodesic guess) or a number of perturbed starts
+    multistart: bool | int = DEFAULT_MULTISTART
+    #: coarser N solved first, each interpolated onto the next grid
+    continuation: tuple[int, ...] = ()
+
+    def __post_init__(self) -> None:
+        if self.backend not in BACKENDS:
+            raise ConfigError(f"unknown solver backend {self.backend!r}; choose one of "
+                              f"{', '.join(BACKENDS)}")
+        if not isinstance(self.ipopt, dict) or not all(isinstance(k, str) for k in self.ipopt):
+            raise ConfigError(f"ipopt options are a dict of option names and values, e.g. "
+                              f"{{'tol': 1e-8}}, got {self.ipopt!r}")
+        if not isinstance(self.jit, bool):
+            raise ConfigError(f"jit is True or False, got {self.jit!r}")
+        multistart = self.multistart
+        if not isinstance(multistart, (bool, Integral)) or multistart < 0:
+            raise ConfigError(f"multistart is True, False or a number of perturbed starts "
+                              f"(>= 0), got {multistart!r}")
+        grids = tuple(self.continuation)
+        if not all(isinstance(n, Integral) and not isinstance(n, bool) and n >= 2
+                   for n in grids):
+            raise ConfigError(f"continuation lists coarser grids, integers >= 2, e.g. "
+                              f"(16, 32), got {self.continuation!r}")
+        object.__setattr__(self, "ipopt", dict(self.ipopt))
+        object.__setattr__(self, "max_seconds", check_seconds(self.max_seconds))
+        object.__setattr__(self, "continuation", tuple(int(n) for n in grids))
+
+    @property
+    def run_ipopt(self) -> dict[str, Any]:
+        """IPOPT's options of each run: the given ones, ``max_wall_time`` the solve's limit
+        unless they set it."""
+        return {"max_wall_time": self.max_seconds, **self.ipopt}
+
+
+#: the names of the solver options (the keyword shortcuts of og.solve that make them)
+OPTION_KEYS = tuple(f.name for f in fields(SolverOptions))
