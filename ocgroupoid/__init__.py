@@ -10,7 +10,8 @@ State the continuous problem with :class:`Problem` on a product of groupoid fact
 The package is laid out as its pipeline: ``lie`` -> ``groupoid`` -> ``model`` (problem,
 mechanics) -> ``nlp`` (schemes, layout, assembly, transcription) -> ``solve`` (solver,
 guesses, read-out, diagnostics, solution) -> ``models`` (canonical systems) -> ``files``
-(YAML), ``export`` (C code), ``plotting`` -> ``cli``.
+(YAML), ``export`` (C code), ``plotting`` -> ``sweep``, ``bench``, ``mpc`` -> ``cli`` (see
+docs/explanation/architecture.md).
 """
 
 from . import _startup  # noqa: F401  (first: Ctrl-C while the command line starts, one line)

@@ -199,9 +199,9 @@ def test_the_helper_answers_and_is_stopped_every_way() -> None:
 # -- the time a solve takes, up front (item 8) -------------------------------------------------
 
 def test_a_long_solve_is_announced_with_its_estimate(monkeypatch) -> None:
-    from ocgroupoid import cli
+    from ocgroupoid.cli import solve
 
-    monkeypatch.setattr(cli, "LONG_SOLVE", 0.0)  # every solve is long now
+    monkeypatch.setattr(solve, "LONG_SOLVE", 0.0)  # every solve is long now
     r = runner.invoke(app, ["solve", str(PROBLEMS / "so3_rest_to_rest.yaml"), "--set",
                             "horizon.N=16", "--set", "solver.multistart=false"])
     assert r.exit_code == 0, r.output

@@ -367,3 +367,30 @@ def test_mx_symbol_in_the_api_says_use_sx() -> None:
     fresh = Problem(Groupoid(LieGroupFactor(SO3Group, state="R", velocity="Omega")))
     with pytest.raises(OcgError, match="ca.SX.sym"):
         fresh.mechanics(ca.MX.sym("l"), "Omega")
+
+
+def test_boundary_values_are_refused_alike_wherever_they_are_given() -> None:
+    """One parser (ocgroupoid.model.boundary_values, issue 25): a problem's initial/final, the
+    overrides of one instance and a simulation's initial values name a mistake alike."""
+    import ocgroupoid as og
+    from ocgroupoid.nlp.transcription import Discretization, Transcription
+
+    pb = rigid_body()
+    unknown = r"initial\.Omgea: unknown; states are \['R'\], velocities \['Omega'\]"
+    for give in (lambda: pb.initial(Omgea=[0, 0, 0]),
+                 lambda: Transcription(pb, Discretization(N=4)).pack(initial={"Omgea": [0, 0, 0]}),
+                 lambda: og.simulate(pb, steps=1, initial={"Omgea": [0, 0, 0]})):
+        with pytest.raises(ConfigError, match=unknown):
+            give()
+    G = og.Groupoid(og.Pair(1, "x", "v"))
+    first = og.Problem(G, name="line", order=1)
+    first.minimize(0.5 * ca.sumsqr(first.velocity("v")))
+    first.report_controls(first.velocity("v"), ["v"])
+    first.initial(x=[0.0])
+    first.final(x=[1.0])
+    first.horizon(1.0)
+    velocity = r"final\.v: a first-order problem takes no velocity conditions"
+    for give in (lambda: first.final(v=[0.0]),
+                 lambda: Transcription(first, Discretization(N=4)).pack(final={"v": [0.0]})):
+        with pytest.raises(ConfigError, match=velocity):
+            give()

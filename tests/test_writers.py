@@ -21,8 +21,7 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
-from ocgroupoid import cli
-from ocgroupoid.cli import app
+from ocgroupoid.cli import app, listing
 from ocgroupoid.errors import ConfigError
 from ocgroupoid.solve.outputs import check_file, check_folder, remove_stale_temporaries
 from ocgroupoid.solve.solution import write_atomic
@@ -317,7 +316,7 @@ def test_list_finds_the_installed_copy_of_the_problem_files(tmp_path: Path,
     (shipped / "installed_example.yaml").write_text("model: rigid_body\n")
     monkeypatch.setattr(sysconfig, "get_path", lambda name, *a, **k: str(data))
     monkeypatch.chdir(tmp_path)
-    assert shipped in cli.problem_folders()
+    assert shipped in listing.problem_folders()
     text = (ROOT / "pyproject.toml").read_text()
     assert '"share/ocgroupoid/problems" = ["problems/*.yaml"]' in text
 

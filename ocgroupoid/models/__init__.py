@@ -1,5 +1,10 @@
 """The canonical systems, written with the public API only.
 
+``models`` (plural) holds the *models* — rigid body, heavy top, plate-ball, quadrotor... —
+each a function building a :class:`~ocgroupoid.model.problem.Problem`, registered under the
+name a problem file's ``model:`` key selects. The language they are written in (Problem,
+mechanics, boundary values, labels) is :mod:`ocgroupoid.model` (singular), below them.
+
 Every module in this package is imported here; each registers its model spec, so a new
 model is one new file.
 """

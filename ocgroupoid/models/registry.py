@@ -2,7 +2,7 @@
 
 A model module registers a :class:`ModelSpec`: pydantic schemas for its ``parameters``,
 ``initial`` and ``final`` sections, and a builder that turns validated sections into a
-:class:`~ocgroupoid.problem.Problem` using only the public API.
+:class:`~ocgroupoid.model.problem.Problem` using only the public API.
 """
 
 from __future__ import annotations

@@ -9,10 +9,12 @@ control (solid) against the plan's (dashed), bounds as dotted lines; the warm st
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .report import MpcResult
+if TYPE_CHECKING:  # the result draws itself with this module (MpcResult.plot)
+    from .report import MpcResult
 
 
 def figure(result: MpcResult, path: Path) -> Path:

@@ -29,6 +29,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import BoundaryError, ConfigError
+from ..model.boundary_values import prescribe
 from ..model.consistency import check_order
 from ..model.problem import Boundary, Problem
 from ..model.values import check_horizon
@@ -190,13 +191,7 @@ class NonlinearProgram:
         start = Boundary(dict(pb.start.states), dict(pb.start.velocities))
         end = Boundary(dict(pb.end.states), dict(pb.end.velocities))
         for bc, upd, label in ((start, initial, "initial"), (end, final, "final")):
-            for name, value in (upd or {}).items():
-                if name in G.state_names:
-                    bc.states[name] = pb.check_state(name, value, label)
-                elif name in G.velocity_names and pb.end_velocities:
-                    bc.velocities[name] = pb.check_velocity(name, value, label)
-                else:
-                    raise ConfigError(f"{label}.{name}: unknown state or velocity")
+            prescribe(bc, upd or {}, label, G, pb.end_velocities)
         if Masks.of(G, pb.end_velocities, start, end) != self.masks:
             raise BoundaryError(
                 "the overrides change which boundary components are prescribed; that changes "

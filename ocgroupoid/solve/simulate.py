@@ -39,6 +39,7 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
 from ..errors import ConfigError, DimensionError, SolverError
+from ..model.boundary_values import prescribe
 from ..model.problem import Problem
 from ..nlp import dynamics
 from ..nlp.dynamics import Dynamics
@@ -373,21 +374,13 @@ def initial_state(problem: Problem, initial: dict[str, Any] | None) -> tuple[np.
                                                                              np.ndarray]:
     """The initial node state s_0 (normalised: a unit quaternion) and velocity V_0: the
     problem's initial values, overridden by ``initial``; none may be left free."""
-    G = problem.groupoid
-    states, velocities = dict(problem.start.states), dict(problem.start.velocities)
-    for name, value in (initial or {}).items():
-        if name in G.state_names:
-            states[name] = problem.check_state(name, value, "initial")
-        elif name in G.velocity_names:
-            velocities[name] = problem.check_velocity(name, value, "initial")
-        else:
-            raise ConfigError(f"initial.{name}: unknown; states are {G.state_names}, "
-                              f"velocities {G.velocity_names}")
+    start = problem.start.copy()
+    prescribe(start, initial or {}, "initial", problem.groupoid, problem.end_velocities)
     s0: list[np.ndarray] = []
     V0: list[np.ndarray] = []
-    for f in G.factors:
-        for name, value, out in ((f.state, states.get(f.state), s0),
-                                 (f.velocity, velocities.get(f.velocity), V0)):
+    for f in problem.groupoid.factors:
+        for name, value, out in ((f.state, start.states.get(f.state), s0),
+                                 (f.velocity, start.velocities.get(f.velocity), V0)):
             if value is None or any(v is None for v in np.asarray(value, dtype=object).ravel()):
                 raise ConfigError(f"initial.{name} is free in {problem.name}: a simulation "
                                   f"starts from every initial state and velocity; pass "

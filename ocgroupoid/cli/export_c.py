@@ -1,0 +1,59 @@
+"""``ocgroupoid export-c FILE --out DIR``: the compiled problem as a C project."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+from ..errors import OcgError
+from .console import SET_HELP, err, fail, out, status
+
+
+def export_c_command(
+    file: Path = typer.Argument(..., help="problem file (YAML)"),
+    out_dir: Path = typer.Option(..., "--out", help="folder to write the C project into"),
+    build: bool = typer.Option(False, "--build", help="run make right after exporting"),
+    set_: list[str] = typer.Option([], "--set", help=SET_HELP),
+    cflags: str = typer.Option("", "--cflags", help="extra CFLAGS for --build"),
+    force: bool = typer.Option(False, "--force", help="write into --out even if it holds "
+                               "files export-c did not write (they are overwritten)"),
+    prefix: Optional[str] = typer.Option(None, "--prefix", help="start of every C name and "
+                                         "file of the export (e.g. so3_; default ocg_): "
+                                         "exports with different prefixes link into one "
+                                         "program"),
+) -> None:
+    """Export the compiled problem as a C project (IPOPT via CasADi codegen): `make -C OUT`
+    builds OUT/solve, which prints the solution JSON; OUT/README.md tells the rest. Needs a
+    C compiler and make to build. OUT must be new, empty or an earlier export (--force)."""
+    from .. import files
+    from ..export import DEFAULT_PREFIX, claim_folder, export_c, make, positive_parameters
+
+    try:
+        cfg = files.load(file, set_)
+        N = files.fixed_grid(cfg, "export-c")
+        claim_folder(out_dir, force, "--out")
+        f = cfg.file
+        d = f.discretization
+        with status("exporting C code...", False):
+            done = export_c(files.build(cfg), out_dir, N, d.retraction, d.rule,
+                            f.solver.ipopt, scheme=d.scheme, steps=d.steps, force=force,
+                            backend=f.solver.backend, max_seconds=f.solver.max_seconds,
+                            positive=positive_parameters(cfg.spec.parameters),
+                            prefix=prefix or DEFAULT_PREFIX)
+        if build:
+            with status("building with make...", False):
+                binary = make(done.folder, cflags)
+    except OcgError as e:
+        fail(str(e))
+        return
+    out.print(f"{done.problem} (N={done.N}: {done.n_x} variables, {done.n_p} parameters) "
+              f"exported to {done.folder}")
+    if build:
+        out.print(f"built {binary}; run it (prints the solution JSON) or `{binary} PARAMS`")
+    else:
+        out.print(f"build with `make -C {done.folder}`; see {done.folder / 'README.md'}")
+    if f.solver.multistart or f.solver.continuation:
+        err.print("note: the C solver starts from the geodesic guess; multistart and "
+                  "continuation of the problem file stay in Python", highlight=False)
