@@ -63,7 +63,7 @@ def chart(rows: list[dict], path: Path) -> Path:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(8, 5.5), layout="constrained")
+    fig, ax = plt.subplots(figsize=(10, 5.5), layout="constrained")
     for i, name in enumerate(dict.fromkeys(r["file"] for r in rows)):
         colour = f"C{i % 10}"
         for scheme, marker in (("order4", "s"), ("order2", "o")):
@@ -73,7 +73,7 @@ def chart(rows: list[dict], path: Path) -> Path:
                       label=f"{name.removesuffix('.yaml')} {scheme}")
     ax.set_xlabel("solver time of one start [s]")
     ax.set_ylabel("landing error / distance covered")
-    ax.set_title("order4 at the file's N (squares) against order2 at N, 2N, 4N (circles)")
+    ax.set_title("order4 at the file's N (squares), order2 at N, 2N, 4N (circles)", fontsize=10)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7, ncol=2, loc="center left", bbox_to_anchor=(1.0, 0.5))
     return save_png(fig, path, 110)

@@ -32,16 +32,13 @@ def export_c_command(
 
     try:
         cfg = files.load(file, set_)
-        N = files.fixed_grid(cfg, "export-c")
+        files.fixed_grid(cfg, "export-c")  # one grid: N: auto is refused with the fix
         claim_folder(out_dir, force, "--out")
-        f = cfg.file
-        d = f.discretization
         with status("exporting C code...", False):
-            done = export_c(files.build(cfg), out_dir, N, d.retraction, d.rule,
-                            f.solver.ipopt, scheme=d.scheme, steps=d.steps, force=force,
-                            backend=f.solver.backend, max_seconds=f.solver.max_seconds,
+            done = export_c(files.build(cfg), out_dir, force=force,
                             positive=positive_parameters(cfg.spec.parameters),
-                            prefix=prefix or DEFAULT_PREFIX)
+                            prefix=prefix or DEFAULT_PREFIX, method=files.method(cfg),
+                            options=files.options(cfg))
         if build:
             with status("building with make...", False):
                 binary = make(done.folder, cflags)
@@ -54,6 +51,6 @@ def export_c_command(
         out.print(f"built {binary}; run it (prints the solution JSON) or `{binary} PARAMS`")
     else:
         out.print(f"build with `make -C {done.folder}`; see {done.folder / 'README.md'}")
-    if f.solver.multistart or f.solver.continuation:
+    if cfg.file.solver.multistart or cfg.file.solver.continuation:
         err.print("note: the C solver starts from the geodesic guess; multistart and "
                   "continuation of the problem file stay in Python", highlight=False)

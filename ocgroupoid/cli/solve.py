@@ -33,7 +33,6 @@ def solve(
         f = cfg.file
         target, picture = _solve_outputs(out_path, plot_path, f.output)
         problem = files.build(cfg)
-        d = f.discretization
         est = files.estimate(cfg, problem)
         if est is not None and est.seconds > LONG_SOLVE and not quiet:
             err.print(f"N={f.horizon.N}: this solve takes {est}; solver.max_seconds = "
@@ -43,14 +42,9 @@ def solve(
             sol = _solve_to_accuracy(problem, f, quiet)
         else:
             with status("building the NLP...", quiet):
-                solver = compile_problem(problem, f.horizon.N, d.retraction, d.rule,
-                                         f.solver.ipopt, d.scheme, d.steps, f.solver.jit,
-                                         f.solver.backend, f.solver.max_seconds,
-                                         bound_points=d.bound_points)
+                solver = compile_problem(problem, files.method(cfg), files.options(cfg))
             with status("solving...", quiet) as spinner:
-                sol = solver.solve(multistart=f.solver.multistart,
-                                   continuation=f.solver.continuation or None,
-                                   progress=spinner.update if spinner is not None else silent)
+                sol = solver.solve(progress=spinner.update if spinner is not None else silent)
         if target is not None:
             sol.to_json(target)
         if picture is not None:
