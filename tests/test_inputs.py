@@ -373,7 +373,7 @@ def test_boundary_values_are_refused_alike_wherever_they_are_given() -> None:
     """One parser (ocgroupoid.model.boundary_values, issue 25): a problem's initial/final, the
     overrides of one instance and a simulation's initial values name a mistake alike."""
     import ocgroupoid as og
-    from ocgroupoid.nlp.transcription import Discretization, Transcription
+    from ocgroupoid.nlp import Discretization, Transcription
 
     pb = rigid_body()
     unknown = r"initial\.Omgea: unknown; states are \['R'\], velocities \['Omega'\]"
