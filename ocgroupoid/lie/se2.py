@@ -18,7 +18,6 @@ xy-plane.
 
 from __future__ import annotations
 
-import difflib
 from typing import Any
 
 import casadi as ca
@@ -325,11 +324,7 @@ def from_spec(v: Any) -> np.ndarray:
     if isinstance(v, str) and v == "identity":
         return np.eye(3)
     if isinstance(v, dict):
-        wrong = [k for k in v if k not in _KEYS]
-        if wrong or not v:
-            close = difflib.get_close_matches(str(wrong[0]), _KEYS, 1) if wrong else []
-            hint = f"; did you mean {close[0]!r}?" if close else ""
-            raise ConfigError(f"a planar pose is {POSE_FORMS}; got {v!r}{hint}")
+        so3.only_keys(v, _KEYS, f"a planar pose is {POSE_FORMS}")
         angle = v.get("angle", 0.0)
         if isinstance(angle, bool) or not isinstance(angle, (int, float)) or \
                 not np.isfinite(angle):

@@ -11,7 +11,6 @@ derivative is NaN.
 
 from __future__ import annotations
 
-import difflib
 from typing import Any
 
 import casadi as ca
@@ -269,11 +268,7 @@ def from_spec(v: Any) -> np.ndarray:
     if isinstance(v, str) and v == "identity":
         return np.eye(4)
     if isinstance(v, dict):
-        wrong = [k for k in v if k not in _KEYS]
-        if wrong or not v:
-            close = difflib.get_close_matches(str(wrong[0]), _KEYS, 1) if wrong else []
-            hint = f"; did you mean {close[0]!r}?" if close else ""
-            raise ConfigError(f"a pose is {POSE_FORMS}; got {v!r}{hint}")
+        so3.only_keys(v, _KEYS, f"a pose is {POSE_FORMS}")
         R = so3.from_spec(v.get("rotation", "identity"))
         p = so3.number_list(v.get("position", [0.0, 0.0, 0.0]), 3, "position")
         return np.asarray(_homogeneous(R, p))

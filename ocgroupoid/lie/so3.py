@@ -307,6 +307,20 @@ def number_list(v: Any, n: int, what: str) -> np.ndarray:
     return np.asarray(v, dtype=float)
 
 
+def did_you_mean(word: Any, choices: tuple[str, ...]) -> str:
+    """``"; did you mean 'x'?"`` for the choice x closest to word, else ``""``."""
+    close = difflib.get_close_matches(str(word), choices, 1)
+    return f"; did you mean {close[0]!r}?" if close else ""
+
+
+def only_keys(v: dict[Any, Any], keys: tuple[str, ...], forms: str) -> None:
+    """A ConfigError ``forms; got v`` (with the closest key) unless v is a non-empty dict
+    of ``keys``."""
+    wrong = [k for k in v if k not in keys]
+    if wrong or not v:
+        raise ConfigError(f"{forms}; got {v!r}{did_you_mean(wrong[0], keys) if wrong else ''}")
+
+
 def from_spec(v: Any) -> np.ndarray:
     """A rotation written in any documented form (:data:`ROTATION_FORMS`) or given as a
     3 x 3 NumPy array, as a checked 3 x 3 matrix."""
@@ -332,6 +346,5 @@ def from_spec(v: Any) -> np.ndarray:
         if not isinstance(val, list) or len(val) != 3:
             raise ConfigError("matrix needs 3 rows of 3 numbers")
         return from_matrix(np.vstack([number_list(r, 3, "a matrix row") for r in val]))
-    close = difflib.get_close_matches(str(kind), _FORMS, 1)
-    hint = f"; did you mean {close[0]!r}?" if close else ""
-    raise ConfigError(f"unknown rotation form {kind!r}{hint} A rotation is {ROTATION_FORMS}")
+    raise ConfigError(f"unknown rotation form {kind!r}{did_you_mean(kind, _FORMS)} A rotation "
+                      f"is {ROTATION_FORMS}")
