@@ -81,7 +81,7 @@ def test_a_primal_dual_warm_start_reaches_the_cold_solution_in_fewer_iterations(
     prev = solver.solve()
     axis = np.array([1.0, 2.0, 3.0]) / np.sqrt(14.0)
     for k in (1, 2, 3):
-        final = {"R": so3.exp(axis * 2.5 * (1 + 0.02 * k))}
+        final = {"R": so3.from_rotvec(axis * 2.5 * (1 + 0.02 * k))}
         cold = solver.solve(final=final)
         warm = solver.solve(final=final, warm=prev)
         assert warm.success and warm.discretization["start"] == "warm start"

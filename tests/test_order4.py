@@ -90,8 +90,8 @@ def test_control_polynomial_replayed_by_scipy_lands_on_target(so3) -> None:
 
     z = solve_ivp(rhs, (0.0, data["T"]), np.array([1.0, 0, 0, 0, 0, 0, 0]), method="DOP853",
                   rtol=1e-12, atol=1e-12).y[:, -1]
-    R = og.so3.quat_to_matrix(z[:4] / np.linalg.norm(z[:4]))
-    assert np.linalg.norm(og.so3.log(TARGET.T @ R)) <= 1e-6
+    R = og.SO3.matrix(z[:4] / np.linalg.norm(z[:4]))
+    assert np.linalg.norm(og.SO3.log(og.SO3.of_matrix(TARGET.T @ R))) <= 1e-6
     assert np.linalg.norm(z[4:]) <= 1e-6  # at rest
 
 

@@ -26,7 +26,7 @@ import numpy as np
 
 from .. import files
 from ..errors import ConfigError, OcgError, SolverError
-from ..lie import so3
+from ..lie import SO3
 from ..model.problem import Problem
 from .methods import Method
 from .outcome import OUTCOMES, error_cell, judge, net_turn
@@ -69,7 +69,7 @@ def check_state(cfg: files.Config, state: str) -> None:
     """The manoeuvre's state must be an SO(3) factor of the problem."""
     problem = files.build(cfg)
     found = {f.state: f for f in problem.groupoid.factors}
-    if state not in found or getattr(found[state], "group", None) is not so3.SO3 or \
+    if state not in found or getattr(found[state], "group", None) is not SO3 or \
             found[state].state_size != 4:
         raise ConfigError(f"--state {state}: the problem has no SO(3) state of that name "
                        f"(states: {', '.join(found)}); a stability map slews an attitude")

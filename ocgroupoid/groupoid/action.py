@@ -14,7 +14,6 @@ import casadi as ca
 import numpy as np
 
 from ..errors import ConfigError
-from ..lie import so3
 from ..lie._backend import dual, is_symbolic, safe_if
 from ..lie.group import Array
 from ..lie.retraction import Retraction
@@ -73,7 +72,7 @@ class SphereAction(Factor):
         self.state, self.velocity = state, velocity
 
     def step(self, s: Array, ret: Retraction, a: Array) -> Array:
-        return ret.tau(a).T @ s
+        return self.group.matrix(ret.tau(a)).T @ s
 
     def base(self, s: Array) -> Array:
         return s
@@ -89,7 +88,7 @@ class SphereAction(Factor):
 
     def rplus(self, s: Array, v: Array) -> Array:
         """The direction s rotated by the rotation vector v: ``exp(hat(v)) s``."""
-        return so3.exp(v) @ s
+        return SO3.matrix(SO3.exp(v)) @ s
 
     def rminus(self, s: Array, goal: Array) -> Array:
         """The rotation vector, orthogonal to both, that turns the goal into s/|s|."""
@@ -105,7 +104,7 @@ class SphereAction(Factor):
         return _cross(q, y)
 
     def ad(self, y: Array) -> Array:
-        return so3.hat(y)
+        return SO3.hat(y)
 
     def state_rate(self, s: Array, y: Array) -> Array:
         return _cross(s, y)
@@ -121,7 +120,7 @@ class SphereAction(Factor):
         turns = angle > 1e-12
         axis = ca.if_else(turns, v / safe_if(turns, angle, 1.0), tangent_basis(start[:3])[0])
         h = T / N
-        return [(name, ca.repmat(ret.tau_inv_state(so3.quat_exp(-axis * phi / N)) / h, 1, N))
+        return [(name, ca.repmat(ret.tau_inv(SO3.exp(-axis * phi / N)) / h, 1, N))
                 for name, phi in (("great circle", angle),
                                   ("great circle, long way", angle - 2 * np.pi))]
 
@@ -161,7 +160,8 @@ class SphereAction(Factor):
         return (np.asarray(g[0]), np.asarray(g[1]) @ np.asarray(k[1]))
 
     def element(self, s: np.ndarray, w: Any) -> tuple[np.ndarray, np.ndarray]:
-        return (np.asarray(s), np.asarray(w))
+        """``(Gamma, W)``, W the rotation matrix of the rotation w."""
+        return (np.asarray(s), np.asarray(SO3.matrix(w)))
 
 
 @dual

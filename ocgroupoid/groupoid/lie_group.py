@@ -12,6 +12,7 @@ from ..errors import ConfigError
 from ..lie._backend import is_symbolic
 from ..lie.group import Array, LieGroup
 from ..lie.retraction import Retraction
+from ..lie.rn import Rn
 from ..lie.so3 import SO3
 from .base import BoundaryMask, Factor, Labelled, Side
 
@@ -25,63 +26,63 @@ class LieGroupFactor(Factor):
     (``dg/dt = g hat(xi)``) or spatial ``g_{k+1} = w_k g_k`` (``dg/dt = hat(xi) g``),
     ``w_k = tau(h xi_k)``.
 
-    Node states are stored in the group's :class:`~ocgroupoid.lie.form.StateForm` (a unit
-    quaternion for SO(3), quaternion and position for SE(3), ...; the stored product is the
-    group product) and shown to users as the group matrix. Everything that differs between
-    groups is the form's; the Lagrangian is reduced: it sees the velocity, never g.
+    Node states are the group's parameters (a unit quaternion for SO(3), quaternion and
+    position for SE(3), ...; their product is the group product) and shown to users as the
+    group matrix. Everything that differs between groups is the group's
+    (:class:`~ocgroupoid.lie.group.LieGroup`); the Lagrangian is reduced: it sees the
+    velocity, never g.
     """
 
     base_size = 0
 
     def __init__(self, group: LieGroup = SO3, state: str = "R", velocity: str = "Omega",
                  side: Side = "right") -> None:
-        if group.form is None:
+        if isinstance(group, Rn):
             raise ConfigError(f"LieGroupFactor is implemented for SO(3), SE(3) and SE(2), not "
                               f"{group.name}; use Pair for R^n")
         if side not in ("right", "left"):
             raise ConfigError(f"side must be 'right' (body) or 'left' (spatial), got {side!r}")
         self.group = group
-        self.form = group.form
         self.state, self.velocity, self.side = state, velocity, side
-        self.state_size = self.target_size = self.form.size
+        self.state_size = self.target_size = group.size
         self.state_dim = group.dim
-        self.manifold = self.form.manifold
-        self.value_kind = self.form.kind
-        self.value_meaning = self.form.meaning
+        self.manifold = group.manifold
+        self.value_kind = group.kind
+        self.value_meaning = group.meaning
 
     def between(self, a: Array, b: Array) -> Array:
         """The element carrying a to b: ``a^{-1} b`` (right) or ``b a^{-1}`` (left), so that
         ``b = step(a, between(a, b))``. Every relative element is this one."""
-        return self.form.between(a, b, self.side)
+        return self.group.between(a, b, self.side)
 
     def step(self, s: Array, ret: Retraction, a: Array) -> Array:
-        return self.form.translate(s, ret.tau_state(a), self.side)
+        return self.group.translate(s, ret.tau(a), self.side)
 
     def base(self, s: Array) -> Array:
         return _empty(s)
 
     def variation(self, s: Array, eta: Array) -> Array:
         """``g -> g exp(t hat(eta))`` (right) or ``exp(t hat(eta)) g`` (left), stored."""
-        return self.form.body_rate(s, eta) if self.side == "right" else \
-            self.form.spatial_rate(s, eta)
+        return self.group.body_rate(s, eta) if self.side == "right" else \
+            self.group.spatial_rate(s, eta)
 
     def chart(self, s: Array, target: Array) -> Array:
-        """The form's chart of the relative element between(g_T, g): Cayley coordinates of
+        """The group's chart of the relative element between(g_T, g): Cayley coordinates of
         its rotation (and its position), zero only where g = g_T; a rotation of pi is a pole,
         not a root."""
-        return self.form.chart(self.between(target, s))
+        return self.group.chart(self.between(target, s))
 
     def rplus(self, s: Array, v: Array) -> Array:
-        return self.form.translate(s, self.form.exp(v), self.side)
+        return self.group.rplus(s, v, self.side)
 
     def rminus(self, s: Array, goal: Array) -> Array:
-        return self.form.log(self.between(goal, s))
+        return self.group.rminus(s, goal, self.side)
 
     def pack_target(self, x: Array) -> Array:
-        return self.form.normalise(x)
+        return self.group.normalise(x)
 
     def invalid(self, x: Array) -> Array:
-        return self.form.invalid(x)
+        return self.group.invalid(x)
 
     def anchor(self, q: Array, y: Array) -> Array:
         return _empty(y)
@@ -94,7 +95,7 @@ class LieGroupFactor(Factor):
 
     def guesses(self, ret: Retraction, start: Array, end: Array, V0: Array, VN: Array,
                 T: Array, N: int, mask: BoundaryMask) -> Labelled:
-        """The form's paths from start to end (:meth:`StateForm.paths`: the constant twist
+        """The group's paths from start to end (:meth:`LieGroup.paths`: the constant twist
         ``log(between(start, end))/T``, the long way round), each step read out by the
         retraction, so that the discrete path lands on the target exactly. A free final
         state gives rest."""
@@ -103,19 +104,19 @@ class LieGroupFactor(Factor):
         n, h = self.state_size, T / N
         delta = self.between(start[:n], end[:n])
         out = []
-        for label, steps in self.form.paths(delta, N, self.side):
-            xi = [ret.tau_inv_state(w) / h for w in steps]
+        for label, steps in self.group.paths(delta, N, self.side):
+            xi = [ret.tau_inv(w) / h for w in steps]
             out.append((label, ca.repmat(xi[0], 1, N) if len(xi) == 1 else ca.horzcat(*xi)))
         return out
 
     def parse_state(self, value: Any) -> np.ndarray:
-        """A user's value in any form the group accepts (:meth:`StateForm.parse`)."""
-        return self.form.parse(value)
+        """A user's value in any form the group accepts (:meth:`LieGroup.parse`)."""
+        return self.group.parse(value)
 
     @cached_property
     def _matrix(self) -> ca.Function:
         s = ca.SX.sym("s", self.state_size)
-        return ca.Function("matrix", [s], [self.form.matrix(s)])
+        return ca.Function("matrix", [s], [self.group.matrix(s)])
 
     def matrix(self, s: np.ndarray) -> np.ndarray:
         """The group matrix of a numeric state (not renormalised: drift stays visible),
@@ -129,25 +130,25 @@ class LieGroupFactor(Factor):
         """:meth:`distance` of every row, the matrices evaluated in one mapped call."""
         n = len(states)
         M = np.array(self._matrix.map(n)(np.asarray(states, dtype=float).T))
-        r, c = self.form.shown_shape
+        r, c = self.group.shown_shape
         return np.array([self.group.distance_from_group(M[:, i * c:(i + 1) * c])
                          for i in range(n)])
 
     @property
     def shown_shape(self) -> tuple[int, ...]:
-        return self.form.shown_shape
+        return self.group.shown_shape
 
     def shown(self, s: Array) -> Array:
         """The group matrix, row-major."""
-        return self.form.shown(s)
+        return self.group.shown(s)
 
     def sample_state(self, rng: np.random.Generator) -> np.ndarray:
-        return self.form.of_matrix(self.group.sample(rng))
+        return self.group.sample(rng)
 
     def sample_base(self, rng: np.random.Generator) -> None:
         return None
 
-    # -- groupoid structure maps: the group itself, on its matrices ----------------------
+    # -- groupoid structure maps: the group itself, on its parameters -------------------
 
     def source(self, g: Any) -> None:
         return None

@@ -38,14 +38,13 @@ class Pair(Factor):
 
     side = "right"
     componentwise = True
-    value_kind = "vector"
-    value_meaning = "vector (one number per component)"
 
     def __init__(self, n: int, state: str = "q", velocity: str = "v") -> None:
         self.group = Rn(n)
         self.state, self.velocity = state, velocity
         self.state_size = self.state_dim = self.base_size = self.target_size = n
-        self.manifold = f"R^{n}"
+        self.manifold, self.value_kind = self.group.manifold, self.group.kind
+        self.value_meaning = self.group.meaning
 
     def step(self, s: Array, ret: Retraction, a: Array) -> Array:
         return s + a

@@ -38,13 +38,16 @@ def to_numpy(value: Any) -> Any:
 
 
 def _to_dm(value: Any) -> Any:
-    if isinstance(value, ca.DM) or isinstance(value, (int, float)):
-        return value
-    return ca.DM(np.asarray(value, dtype=float))
+    """Arrays, lists and NumPy scalars -> DM; DM, Python numbers and other objects (the
+    group of a method) unchanged."""
+    if isinstance(value, (np.ndarray, list, tuple, np.generic)):
+        return ca.DM(np.asarray(value, dtype=float))
+    return value
 
 
 def dual(fn: F) -> F:
-    """Decorate a CasADi-written formula so that NumPy inputs give NumPy outputs."""
+    """Decorate a CasADi-written formula (a function or a group's method) so that NumPy
+    inputs give NumPy outputs."""
 
     @functools.wraps(fn)
     def wrapper(*args: Any) -> Any:
@@ -66,3 +69,18 @@ def series(x: Any, coefficients: tuple[float, ...]) -> Any:
     for c in reversed(coefficients[:-1]):
         out = out * x + c
     return out
+
+
+def guarded(t2: Any, below: float, coefficients: tuple[float, ...],
+            exact: Callable[[Any, Any], Any]) -> Any:
+    """A function f of t with a removable singularity at t = 0, at ``t^2 = t2``: the series
+    ``sum_k c_k t2^k`` below ``t2 = below``, else ``exact(t, t^2)``, evaluated at a guarded
+    argument so that neither branch, nor its derivative, is NaN."""
+    small = t2 < below
+    safe = safe_if(small, 1.0, t2)
+    return safe_if(small, series(t2, coefficients), exact(ca.sqrt(safe), safe))
+
+
+def row_major(matrix: Callable[[Any], Any]) -> Callable[[Any], Any]:
+    """``s -> vec(matrix(s)^T)``: a matrix-valued map flattened row-major."""
+    return dual(lambda s: ca.vec(matrix(s).T))

@@ -1,53 +1,66 @@
-"""The interface every Lie group of ocgroupoid implements (manif/Sophus vocabulary).
+"""The interface every Lie group of ocgroupoid implements (jaxlie's shape, manif's words).
 
-Primitives (identity, compose, inverse, exp, log, Ad, ad, sample) are per group; the
-deduced operations ``between``, ``rplus`` and ``rminus`` are written once here on top of
-them (manif's "deduced" section):
+A group is one object whose methods act on arrays: NumPy arrays (NumPy back) or CasADi
+SX/MX graphs (a graph back), through :func:`~ocgroupoid.lie._backend.dual`. An element is
+held as its *parameters*, the numbers node states store (jaxlie's "parameters"): a unit
+quaternion for SO(3) (4 numbers, 3 dof), a quaternion and a position for SE(3) (7 numbers,
+6 dof), the half-angle unit complex number and a position for SE(2) (4 numbers, 3 dof),
+the vector itself for R^n. The group matrix is only a view (:meth:`LieGroup.matrix`).
+Algebra elements are vectors of R^dim; ``hat`` gives their matrix.
 
-    between(a, b) = a^{-1} b,   rplus(a, v) = a exp(v),   rminus(a, b) = log(b^{-1} a),
+Every rotation is stored as a unit quaternion (or its restriction to the plane), so the
+product of parameters is the group product, the sign of the quaternion is free, and the
+Cayley coordinates ``2 q_v / q_w`` of a rotation are rational, with a pole (never a root)
+at a rotation of pi.
 
-so that ``rplus(b, rminus(a, b)) = a`` wherever log is the inverse of exp.
+Primitives are per group; the deduced operations are written once here (manif's "deduced"
+section):
 
-:class:`MatrixGroup` adds what node states on the group need: the Cayley map and the left
-Jacobian in closed form, and the stored form of elements (:mod:`ocgroupoid.lie.form`).
+    between(a, b) = a^{-1} b,   rplus(a, v) = a exp(v),   rminus(a, b) = log(b^{-1} a)
+
+(mirrored on the left side), so that ``rplus(b, rminus(a, b)) = a`` wherever log inverts
+exp. Derivatives of maps f: g -> G are right-trivialised, as in
+:mod:`ocgroupoid.lie.retraction`: ``d/ds f(a + s b)|_0 = hat(df(a) b) f(a)``.
 """
 
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from types import ModuleType
-from typing import TYPE_CHECKING, Any
+from typing import Any, Literal
 
-import casadi as ca
 import numpy as np
 
-from ._backend import is_symbolic
-
-if TYPE_CHECKING:
-    from .form import StateForm
+from ._backend import row_major
 
 # numpy.ndarray | casadi.SX | casadi.MX | casadi.DM. mypy (2.4) resolves an overloaded call on
 # a value of this alias with casadi's first overload (Sparsity), not as Any: the few lines that
 # then fail to type-check say "type: ignore[...]  # Array = Any".
 Array = Any
+Side = Literal["right", "left"]
+Steps = list[tuple[str, list[Array]]]
 
 
 class LieGroup(ABC):
-    """A matrix Lie group G with Lie algebra identified with R^dim.
+    """A Lie group G, its elements held as parameters, its algebra identified with R^dim.
 
-    Group elements are the matrices (or vectors, for R^n) that the formulas act on.
+    Sizes and the words parameter files and messages use are declared once per group.
     """
 
-    name: str
+    name: str  # short name, e.g. "SE3"
     dim: int  # dimension of the Lie algebra (tangent space)
+    size: int  # parameters per element
     #: the algebra components that rotate, to which retractions' step limits refer
     turning: slice = slice(None)
-    #: how node states store an element (None: not a node state of LieGroupFactor)
-    form: "StateForm | None" = None
+    manifold: str  # how messages name the group, e.g. "SE(3)"
+    kind: str  # how a parameter file writes an element: "rotation", "pose", "vector"
+    meaning: str  # one line for parameter-file documentation
+    shown_shape: tuple[int, ...]  # the matrix (or vector) users see
+
+    # -- the group -------------------------------------------------------------------
 
     @abstractmethod
-    def identity(self) -> Array:
-        """The identity element e."""
+    def identity(self) -> np.ndarray:
+        """The parameters of the identity e."""
 
     @abstractmethod
     def compose(self, a: Array, b: Array) -> Array:
@@ -62,105 +75,135 @@ class LieGroup(ABC):
         """The exponential map g -> G."""
 
     @abstractmethod
-    def log(self, g: Array) -> Array:
-        """The principal logarithm G -> g."""
+    def log(self, s: Array) -> Array:
+        """The principal logarithm G -> g (rotation angle in [0, pi]), on graphs too; either
+        sign of a quaternion gives the same value."""
 
     @abstractmethod
-    def Ad(self, g: Array) -> Array:
-        """The adjoint matrix: Ad_g x = vee(g hat(x) g^{-1})."""
+    def cay(self, x: Array) -> Array:
+        """The Cayley map ``(I - hat(x)/2)^{-1} (I + hat(x)/2)``."""
+
+    @abstractmethod
+    def cay_inv(self, s: Array) -> Array:
+        """The algebra element x with cay(x) = s (either sign of a quaternion); a
+        :class:`~ocgroupoid.errors.SingularityError` on NumPy input at a rotation of pi."""
+
+    # -- the algebra -----------------------------------------------------------------
+
+    @abstractmethod
+    def hat(self, x: Array) -> Array:
+        """The matrix of the algebra element x."""
+
+    @abstractmethod
+    def vee(self, X: Array) -> Array:
+        """The algebra coordinates of a matrix of the algebra."""
+
+    @abstractmethod
+    def Ad(self, s: Array) -> Array:
+        """The adjoint matrix: ``Ad_g x = vee(g hat(x) g^{-1})``."""
 
     @abstractmethod
     def ad(self, x: Array) -> Array:
-        """The matrix of ad_x: ad_x y = [x, y]."""
+        """The matrix of ad_x: ``ad_x y = [x, y]``."""
 
     @abstractmethod
-    def distance_from_group(self, g: Array) -> float:
-        """How far a numeric matrix is from the group (0 for an exact element)."""
+    def dexp(self, x: Array) -> Array:
+        """Right-trivialised derivative of exp: the left Jacobian (dim x dim)."""
+
+    @abstractmethod
+    def dexp_inv(self, x: Array) -> Array:
+        """Inverse of ``dexp(x)``."""
+
+    @abstractmethod
+    def dcay(self, x: Array) -> Array:
+        """Right-trivialised derivative of cay (dim x dim)."""
+
+    @abstractmethod
+    def dcay_inv(self, x: Array) -> Array:
+        """Inverse of ``dcay(x)``."""
+
+    # -- parameters: motion, charts, values --------------------------------------------
+
+    @abstractmethod
+    def body_rate(self, s: Array, y: Array) -> Array:
+        """``d/dt (s exp(t y))`` at t = 0: ds/dt when ``s^{-1} ds/dt = hat(y)``."""
+
+    @abstractmethod
+    def spatial_rate(self, s: Array, y: Array) -> Array:
+        """``d/dt (exp(t y) s)`` at t = 0: ds/dt when ``ds/dt s^{-1} = hat(y)``."""
+
+    @abstractmethod
+    def chart(self, e: Array) -> Array:
+        """Local coordinates (one per degree of freedom) of a relative element e: the
+        Cayley coordinates of its rotation and its position. Zero only at the identity; a
+        rotation of pi is a pole."""
+
+    @abstractmethod
+    def normalise(self, x: Array) -> Array:
+        """A value written in a parameter file -> the parameters (the quaternion
+        normalised, with w >= 0; a zero quaternion stays zero and is :meth:`invalid`)."""
+
+    @abstractmethod
+    def invalid(self, x: Array) -> Array:
+        """1 where a value cannot be normalised (a zero quaternion), else 0."""
+
+    @abstractmethod
+    def matrix(self, s: Array) -> Array:
+        """The group matrix of parameters (not renormalised: drift stays visible)."""
+
+    @abstractmethod
+    def of_matrix(self, M: Any) -> np.ndarray:
+        """The parameters (w >= 0) of a numeric group matrix."""
+
+    @abstractmethod
+    def parse(self, value: Any) -> np.ndarray:
+        """A user's value in any documented form -> the parameters, validated."""
+
+    @abstractmethod
+    def detours(self, delta: Array, v: Array, N: int, side: Side) -> Steps:
+        """The paths of :meth:`paths` besides the geodesic (``v = log(delta)``)."""
 
     @abstractmethod
     def sample(self, rng: np.random.Generator) -> np.ndarray:
-        """A random element (uniform on compact groups, standard normal on R^n)."""
+        """A random element (uniform rotations; standard normal positions and vectors)."""
+
+    @abstractmethod
+    def distance_from_group(self, M: Any) -> float:
+        """How far a numeric matrix is from the group (0 for an exact element)."""
 
     # -- deduced operations (written once) ---------------------------------------------
 
-    def between(self, a: Array, b: Array) -> Array:
-        """``a^{-1} b``: the element that carries a to b from the right."""
-        return self.compose(self.inverse(a), b)
+    def translate(self, s: Array, w: Array, side: Side = "right") -> Array:
+        """``s w`` (right, body) or ``w s`` (left, spatial)."""
+        return self.compose(s, w) if side == "right" else self.compose(w, s)
 
-    def rplus(self, a: Array, v: Array) -> Array:
-        """``a exp(v)``: a moved by the tangent vector v (right trivialisation)."""
-        return self.compose(a, self.exp(v))
+    def between(self, a: Array, b: Array, side: Side = "right") -> Array:
+        """The element carrying a to b: ``a^{-1} b`` (right) or ``b a^{-1}`` (left), so that
+        ``b = translate(a, between(a, b))``."""
+        if side == "right":
+            return self.compose(self.inverse(a), b)
+        return self.compose(b, self.inverse(a))
 
-    def rminus(self, a: Array, b: Array) -> Array:
-        """``log(b^{-1} a)``: the tangent vector from b to a; its norm is their distance."""
-        return self.log(self.between(b, a))
+    def rplus(self, a: Array, v: Array, side: Side = "right") -> Array:
+        """``a exp(v)`` (right) or ``exp(v) a`` (left): a moved by the tangent vector v."""
+        return self.translate(a, self.exp(v), side)
+
+    def rminus(self, a: Array, b: Array, side: Side = "right") -> Array:
+        """``log(between(b, a))``: the tangent vector from b to a; its norm is their
+        distance."""
+        return self.log(self.between(b, a, side))
+
+    def paths(self, delta: Array, N: int, side: Side) -> Steps:
+        """Labelled paths of N steps from the identity to ``delta`` (the preferred first),
+        each as its step elements: one element when every step is the same, else N. A path
+        is followed by ``translate``-ing N times on the given side. The first is the
+        geodesic, the constant step ``exp(log(delta)/N)``; then the :meth:`detours`."""
+        v = self.log(delta)
+        return [("geodesic", [self.exp(v / N)]), *self.detours(delta, v, N, side)]
+
+    def shown(self, s: Array) -> Array:
+        """The group matrix of parameters, flattened row-major."""
+        return row_major(self.matrix)(s)
 
     def __repr__(self) -> str:
         return self.name
-
-
-class MatrixGroup(LieGroup):
-    """A matrix group whose elements can be node states: the Cayley map and the exponential
-    with their right-trivialised derivatives in closed form (the retractions ``cayley`` and
-    ``exp``), and the :class:`~ocgroupoid.lie.form.StateForm` its elements are stored as.
-
-    Derivatives follow the convention of :mod:`ocgroupoid.lie.retraction`:
-    ``d/ds f(a + s b)|_0 = hat(df(a) b) f(a)`` for f = cay (``dcay``) and f = exp
-    (``dexp``, the left Jacobian).
-    """
-
-    form: "StateForm"
-    #: the module whose functions (``inverse``, ``exp``, ``log``, ``hat``, ``vee``, ``Ad``,
-    #: ``ad``, ``cay``, ``cay_inv``, ``dcay``, ``dcay_inv``, ``dexp``, ``dexp_inv``) are the
-    #: group's formulas, written once for NumPy and CasADi
-    formulas: ModuleType
-
-    def compose(self, a: Array, b: Array) -> Array:
-        return a @ b if not is_symbolic(a, b) else ca.mtimes(a, b)
-
-    def inverse(self, a: Array) -> Array:
-        return self.formulas.inverse(a)
-
-    def exp(self, x: Array) -> Array:
-        return self.formulas.exp(x)
-
-    def log(self, g: Array) -> Array:
-        return self.formulas.log(g)
-
-    def hat(self, x: Array) -> Array:
-        """The matrix of the algebra element x."""
-        return self.formulas.hat(x)
-
-    def vee(self, X: Array) -> Array:
-        """The algebra coordinates of a matrix of the algebra."""
-        return self.formulas.vee(X)
-
-    def Ad(self, g: Array) -> Array:
-        return self.formulas.Ad(g)
-
-    def ad(self, x: Array) -> Array:
-        return self.formulas.ad(x)
-
-    def cay(self, x: Array) -> Array:
-        """The Cayley map ``(I - hat(x)/2)^{-1} (I + hat(x)/2)``."""
-        return self.formulas.cay(x)
-
-    def cay_inv(self, g: Array) -> Array:
-        """Its inverse; a SingularityError on NumPy input at a rotation of pi."""
-        return self.formulas.cay_inv(g)
-
-    def dcay(self, x: Array) -> Array:
-        """Right-trivialised derivative of cay (dim x dim)."""
-        return self.formulas.dcay(x)
-
-    def dcay_inv(self, x: Array) -> Array:
-        """Inverse of ``dcay(x)``."""
-        return self.formulas.dcay_inv(x)
-
-    def dexp(self, x: Array) -> Array:
-        """Right-trivialised derivative of exp: the left Jacobian (dim x dim)."""
-        return self.formulas.dexp(x)
-
-    def dexp_inv(self, x: Array) -> Array:
-        """Inverse of ``dexp(x)``."""
-        return self.formulas.dexp_inv(x)

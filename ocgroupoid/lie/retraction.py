@@ -7,12 +7,12 @@ its inverse ``dtau_inv`` (seed 000, Appendix D, eq. 64; seed 001, §6.1):
 
 The left-trivialised ones follow from tau(-a) = tau(a)^{-1}:
 ``tau(a)^{-1} d tau(a)[b] = hat(dtau(-a) b)``, exposed as ``dtau_left``/``dtau_inv_left``.
-Node states use ``tau_state``/``tau_inv_state``, the same map on the group's stored form
-(:mod:`ocgroupoid.lie.form`).
+Group elements are the group's parameters (:mod:`ocgroupoid.lie.group`): a unit quaternion
+on SO(3), quaternion and position on SE(3), ...
 
 The Cayley map and the exponential are written once over every
-:class:`~ocgroupoid.lie.group.MatrixGroup` (SO(3), SE(3), SE(2)), which supplies their
-formulas; the seeds' first-order rule is SO(3)'s alone.
+:class:`~ocgroupoid.lie.group.LieGroup`, which supplies their formulas; the seeds'
+first-order rule is SO(3)'s alone.
 
 Singularities are reported, not hidden: on NumPy input ``tau_inv`` raises
 :class:`SingularityError` with the fix (a smaller step, i.e. a larger N).
@@ -27,11 +27,10 @@ import casadi as ca
 import numpy as np
 
 from ..errors import ConfigError, SingularityError
-from . import so3
-from ._backend import dual, is_symbolic, safe_if
-from .group import Array, LieGroup, MatrixGroup
+from ._backend import dual, guarded, is_symbolic
+from .group import Array, LieGroup
 from .rn import Rn
-from .so3 import cay, dcay, dcay_inv
+from .so3 import SO3, SO3Group
 
 RETRACTION_NAMES = ("cayley", "exp", "first_order")
 
@@ -47,20 +46,12 @@ class Retraction(ABC):
 
     @abstractmethod
     def tau(self, a: Array) -> Array:
-        """The group element tau(a)."""
+        """The group element tau(a) (its parameters)."""
 
     @abstractmethod
-    def tau_inv(self, g: Array) -> Array:
-        """The algebra element a with tau(a) = g."""
-
-    def tau_state(self, a: Array) -> Array:
-        """tau(a) in the group's stored form (:class:`~ocgroupoid.lie.form.StateForm`): a unit
-        quaternion on SO(3), quaternion and position on SE(3), ..."""
-        raise NotImplementedError(f"{self.name} on {self.group.name} has no stored form")
-
-    def tau_inv_state(self, s: Array) -> Array:
-        """``tau_inv`` of a stored element (either sign of its quaternion), on graphs too."""
-        raise NotImplementedError(f"{self.name} on {self.group.name} has no stored form")
+    def tau_inv(self, s: Array) -> Array:
+        """The algebra element a with tau(a) = s (either sign of a quaternion), on graphs
+        too."""
 
     @abstractmethod
     def dtau(self, a: Array) -> Array:
@@ -97,23 +88,17 @@ class Cayley(Retraction):
     name = "cayley"
     step_limit = float(np.pi)
 
-    def __init__(self, group: MatrixGroup = so3.SO3) -> None:
-        self.group: MatrixGroup = group
+    def __init__(self, group: LieGroup = SO3) -> None:
+        self.group = group
 
     def tau(self, a: Array) -> Array:
+        """E.g. ``(1, a/2)/sqrt(1 + |a|^2/4)`` on SO(3)."""
         return self.group.cay(a)
 
-    def tau_inv(self, g: Array) -> Array:
-        """Undefined for a rotation of pi (a SingularityError on NumPy input)."""
-        return self.group.cay_inv(g)
-
-    def tau_state(self, a: Array) -> Array:
-        """E.g. ``(1, a/2)/sqrt(1 + |a|^2/4)`` on SO(3)."""
-        return self.group.form.cay(a)
-
-    def tau_inv_state(self, s: Array) -> Array:
-        """E.g. ``2 q_v / q_w`` on SO(3)."""
-        return self.group.form.cay_inv(s)
+    def tau_inv(self, s: Array) -> Array:
+        """E.g. ``2 q_v / q_w`` on SO(3); undefined for a rotation of pi (a
+        SingularityError on NumPy input)."""
+        return self.group.cay_inv(s)
 
     def dtau(self, a: Array) -> Array:
         return self.group.dcay(a)
@@ -128,21 +113,15 @@ class Exp(Retraction):
     name = "exp"
     step_limit = float(np.pi)
 
-    def __init__(self, group: MatrixGroup = so3.SO3) -> None:
-        self.group: MatrixGroup = group
+    def __init__(self, group: LieGroup = SO3) -> None:
+        self.group = group
 
     def tau(self, a: Array) -> Array:
+        """E.g. ``(cos(t/2), sin(t/2) a/t)``, t = |a|, on SO(3)."""
         return self.group.exp(a)
 
-    def tau_inv(self, g: Array) -> Array:
-        return self.group.log(g)
-
-    def tau_state(self, a: Array) -> Array:
-        """E.g. ``(cos(t/2), sin(t/2) a/t)``, t = |a|, on SO(3)."""
-        return self.group.form.exp(a)
-
-    def tau_inv_state(self, s: Array) -> Array:
-        return self.group.form.log(s)
+    def tau_inv(self, s: Array) -> Array:
+        return self.group.log(s)
 
     def dtau(self, a: Array) -> Array:
         return self.group.dexp(a)
@@ -154,62 +133,50 @@ class Exp(Retraction):
 # -------------------------------------------------------------- SO(3): the seeds' rule
 
 
-def _asin_ratio(x2: Array) -> tuple[Array, Array]:
+def _asin_ratios(x2: Array) -> tuple[Array, Array]:
     """s = asin(x)/x and t = s'(x)/x at x^2 = x2 (x = |a| < 1), NaN-free at 0."""
-    small = x2 < 1e-3
-    safe = safe_if(small, 1.0, x2)
-    x = ca.sqrt(safe)
-    s_exact = ca.asin(x) / x
-    s = safe_if(small, 1 + x2 / 6 + 3 * x2**2 / 40 + 5 * x2**3 / 112 + 35 * x2**4 / 1152, s_exact)
-    t = safe_if(
-        small,
-        1 / 3 + 3 * x2 / 10 + 15 * x2**2 / 56 + 35 * x2**3 / 144 + 315 * x2**4 / 1408,
-        (1 / ca.sqrt(1 - safe) - s_exact) / safe,
-    )
+    s = guarded(x2, 1e-3, (1, 1 / 6, 3 / 40, 5 / 112, 35 / 1152), lambda x, x2: ca.asin(x) / x)
+    t = guarded(x2, 1e-3, (1 / 3, 3 / 10, 15 / 56, 35 / 144, 315 / 1408),
+                lambda x, x2: (1 / ca.sqrt(1 - x2) - ca.asin(x) / x) / x2)
     return s, t
 
 
 @dual
 def _first_order_tau(a: Array) -> Array:
-    c = ca.sqrt(1 - ca.dot(a, a))
-    return c * ca.DM.eye(3) + so3.hat(a) + ca.mtimes(a, a.T) / (1 + c)
-
-
-@dual
-def _first_order_quat(a: Array) -> Array:
     w = ca.sqrt((1 + ca.sqrt(1 - ca.dot(a, a))) / 2)  # cos(angle/2), angle = asin|a|
     return ca.vertcat(w, a / (2 * w))
 
 
 @dual
-def _first_order_inv_quat(q: Array) -> Array:
+def _first_order_tau_inv(q: Array) -> Array:
     return 2 * q[0] * q[1:4] / ca.dot(q, q)
 
 
 @dual
 def _first_order_dtau(a: Array) -> Array:
-    s, t = _asin_ratio(ca.dot(a, a))
-    return ca.mtimes(so3.dexp(s * a), s * ca.DM.eye(3) + t * ca.mtimes(a, a.T))
+    s, t = _asin_ratios(ca.dot(a, a))
+    return ca.mtimes(SO3.dexp(s * a), s * ca.DM.eye(3) + t * ca.mtimes(a, a.T))
 
 
 @dual
 def _first_order_dtau_inv(a: Array) -> Array:
     x2 = ca.dot(a, a)
-    s, t = _asin_ratio(x2)
+    s, t = _asin_ratios(x2)
     D_inv = (ca.DM.eye(3) - t / (s + t * x2) * ca.mtimes(a, a.T)) / s
-    return ca.mtimes(D_inv, so3.dexp_inv(s * a))
+    return ca.mtimes(D_inv, SO3.dexp_inv(s * a))
 
 
 class FirstOrder(Retraction):
     """The seeds' first-order rule ``g ~ I + h xi`` read out by the skew part (seed 001, eq. 8).
 
-    ``tau_inv(R) = vee_skew(R)`` (= sin(angle) * axis); its inverse is the rotation whose
-    skew part is hat(a): ``tau(a) = c I + hat(a) + a a^T/(1 + c)``, ``c = sqrt(1 - |a|^2)``.
+    ``tau_inv(R) = vee((R - R^T)/2)`` (= sin(angle) * axis); its inverse is the rotation
+    whose skew part is hat(a): ``tau(a) = c I + hat(a) + a a^T/(1 + c)``, ``c = sqrt(1 -
+    |a|^2)``, whose unit quaternion is ``(w, a/(2w))``, ``w = cos(angle/2) = sqrt((1 + c)/2)``.
     Defined for steps below pi/2 (|a| < 1).
     """
 
     name = "first_order"
-    group = so3.SO3
+    group = SO3
     step_limit = float(np.pi / 2)
 
     def tau(self, a: Array) -> Array:
@@ -220,24 +187,17 @@ class FirstOrder(Retraction):
             )
         return _first_order_tau(a)
 
-    def tau_inv(self, g: Array) -> Array:
-        if not is_symbolic(g):
-            g = np.asarray(g, dtype=float)
-            if np.trace(g) <= 1.0 + 1e-12:
+    def tau_inv(self, q: Array) -> Array:
+        """``vee_skew(R(q)) = 2 q_w q_v / |q|^2``; a SingularityError on NumPy input where
+        ``tr R = (3 q_w^2 - |q_v|^2)/|q|^2 <= 1`` (a rotation of pi/2 or more)."""
+        if not is_symbolic(q):
+            q = np.asarray(q, dtype=float)
+            if 3 * q[0] ** 2 - np.dot(q[1:4], q[1:4]) <= (1.0 + 1e-12) * np.dot(q, q):
                 raise SingularityError(
                     "first-order retraction singular: rotation of pi/2 or more in one step; "
                     "increase N"
                 )
-        return so3.vee_skew(g)
-
-    def tau_state(self, a: Array) -> Array:
-        """The unit quaternion ``(w, a/(2w))``, ``w = cos(angle/2) = sqrt((1 + sqrt(1 -
-        |a|^2))/2)``."""
-        return _first_order_quat(a)
-
-    def tau_inv_state(self, q: Array) -> Array:
-        """``vee_skew(R(q)) = 2 q_w q_v / |q|^2`` (sin(angle) times the axis)."""
-        return _first_order_inv_quat(q)
+        return _first_order_tau_inv(q)
 
     def dtau(self, a: Array) -> Array:
         return _first_order_dtau(a)
@@ -260,14 +220,14 @@ class Translation(Retraction):
     def tau(self, a: Array) -> Array:
         return a
 
-    def tau_inv(self, g: Array) -> Array:
-        return g
+    def tau_inv(self, s: Array) -> Array:
+        return s
 
     def dtau(self, a: Array) -> Array:
-        return ca.DM.eye(self.group.dim) if is_symbolic(a) else np.eye(self.group.dim)
+        return self.group.dexp(a)
 
     def dtau_inv(self, a: Array) -> Array:
-        return self.dtau(a)
+        return self.group.dexp_inv(a)
 
 
 def retraction(name: str, group: LieGroup) -> Retraction:
@@ -282,15 +242,13 @@ def retraction(name: str, group: LieGroup) -> Retraction:
         )
     if isinstance(group, Rn):
         return Translation(group)
-    if not isinstance(group, MatrixGroup):
-        raise ConfigError(f"no retraction {name!r} is implemented for {group.name}")
     if name == "first_order":
-        if group is not so3.SO3:
+        if not isinstance(group, SO3Group):
             raise ConfigError(f"the first_order retraction is the seeds' rule on SO(3); on "
                               f"{group.name} choose cayley or exp")
         return FirstOrder()
     return Cayley(group) if name == "cayley" else Exp(group)
 
 
-__all__ = ["Retraction", "Cayley", "Exp", "FirstOrder", "Translation", "retraction", "cay",
-           "dcay", "dcay_inv", "RETRACTION_NAMES"]
+__all__ = ["Retraction", "Cayley", "Exp", "FirstOrder", "Translation", "retraction",
+           "RETRACTION_NAMES"]

@@ -145,8 +145,9 @@ def lie_poisson(node: Node) -> ca.SX:
     ret, h = node.retractions[i], node.h
     Mp, Mn = (ca.substitute(M, pb.y, xi) for xi in (node.xi_prev, node.xi_next))
     Op, On = node.xi_prev[vs], node.xi_next[vs]
-    spatial = ca.mtimes(ret.tau(h * On / 2), Mn) - \
-        ca.mtimes(ret.tau(h * Op).T, ca.mtimes(ret.tau(h * Op / 2), Mp))
+    matrix = ret.group.matrix  # W = matrix(tau(h xi))
+    spatial = ca.mtimes(matrix(ret.tau(h * On / 2)), Mn) - \
+        ca.mtimes(matrix(ret.tau(h * Op)).T, ca.mtimes(matrix(ret.tau(h * Op / 2)), Mp))
     others = [node.substitute(c) for n, c in pb.constraints if n != "Phi"]
     return ca.vertcat(spatial / h - node.substitute(torque), *others)
 
@@ -162,11 +163,13 @@ def discrete_casimir(tr: "Transcription", x: np.ndarray, p: np.ndarray) -> np.nd
     d = tr.unpack(x, p)
     h = d["T"] / tr.N
     xi = np.vstack([2 * d["V0"] - d["xi"][0], d["xi"], 2 * d["VN"] - d["xi"][-1]])
-    W_ghost = ret.tau(h * xi[0, vs])
+    matrix = ret.group.matrix  # W = matrix(tau(h xi))
+    W_ghost = matrix(ret.tau(h * xi[0, vs]))
     Gamma = np.vstack([W_ghost @ d["s"][0, ss], d["s"][:, ss]])
     M = ca.Function("M", [pb.y, pb.P], [momentum(pb)[0]])
-    return np.array([float(np.dot(ret.tau(h * xi[j, vs] / 2) @ M(xi[j], d["P"]).full().ravel(),
-                                  Gamma[j])) for j in range(tr.N + 2)])
+    return np.array([float(np.dot(matrix(ret.tau(h * xi[j, vs] / 2))
+                                  @ M(xi[j], d["P"]).full().ravel(), Gamma[j]))
+                     for j in range(tr.N + 2)])
 
 
 # ------------------------------------------------------------------ multi-start guesses

@@ -24,7 +24,7 @@ from typing import Any, ClassVar
 import casadi as ca
 
 from ...groupoid.base import Factor
-from ...lie import so3
+from ...lie import SO3
 
 COORDINATES = ("quaternion", "matrix", "euler")
 
@@ -55,7 +55,7 @@ class Coordinates:
         ``R^T omega`` (spatial side)."""
         if self.factor.side == "right":
             return y
-        return ca.mtimes(so3.quat_to_matrix(self.stored(z)).T, y)
+        return ca.mtimes(SO3.matrix(self.stored(z)).T, y)
 
 
 class Matrix(Coordinates):
@@ -65,15 +65,15 @@ class Matrix(Coordinates):
     size = 9
 
     def of_stored(self, s: Any) -> Any:
-        return ca.vec(so3.quat_to_matrix(s))
+        return ca.vec(SO3.matrix(s))
 
     def stored(self, z: Any) -> Any:
         return quaternion_of_matrix(ca.reshape(z, 3, 3))
 
     def rate(self, z: Any, y: Any) -> Any:
         R = ca.reshape(z, 3, 3)
-        return ca.vec(ca.mtimes(R, so3.hat(y)) if self.factor.side == "right"
-                      else ca.mtimes(so3.hat(y), R))
+        return ca.vec(ca.mtimes(R, SO3.hat(y)) if self.factor.side == "right"
+                      else ca.mtimes(SO3.hat(y), R))
 
 
 class Euler(Coordinates):
@@ -94,7 +94,7 @@ class Euler(Coordinates):
         qx = ca.vertcat(ca.cos(half[0]), ca.sin(half[0]), 0, 0)
         qy = ca.vertcat(ca.cos(half[1]), 0, ca.sin(half[1]), 0)
         qz = ca.vertcat(ca.cos(half[2]), 0, 0, ca.sin(half[2]))
-        return so3.quat_multiply(qz, so3.quat_multiply(qy, qx))
+        return SO3.compose(qz, SO3.compose(qy, qx))
 
     def rate(self, z: Any, y: Any) -> Any:
         W = self.body_rate(z, y)
@@ -107,7 +107,7 @@ class Euler(Coordinates):
 def coordinates(name: str, factor: Factor) -> Coordinates:
     """The coordinates called ``name`` for ``factor``: SO(3) factors get them, every other
     factor keeps its stored form."""
-    is_so3 = getattr(factor, "group", None) is so3.SO3 and factor.state_size == 4
+    is_so3 = getattr(factor, "group", None) is SO3 and factor.state_size == 4
     cls = {"matrix": Matrix, "euler": Euler}.get(name, Coordinates) if is_so3 else Coordinates
     return cls(factor)
 
@@ -132,4 +132,4 @@ def quaternion_of_matrix(R: Any) -> Any:
                                          diag[i] >= diag[(i + 2) % 4]),
                             diag[i] >= diag[(i + 3) % 4])
         q = ca.if_else(best, cands[i], q)
-    return so3.quat_normalise(q)
+    return SO3.normalise(q)
