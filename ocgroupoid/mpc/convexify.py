@@ -30,6 +30,8 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
+from ..nlp.stageform import NotStaged
+
 #: the smallest eigenvalue a projected block keeps, relative to the largest |H| entry
 FLOOR = 1e-8
 
@@ -46,7 +48,7 @@ class StageProjection:
         self.sparsity = ca.diagcat(*[ca.Sparsity.dense(s, s) for s in sizes])
         rows, cols = (np.asarray(v, dtype=np.int64) for v in sp.get_triplet())
         if np.any(stage[rows] != stage[cols]):
-            raise ValueError("the Hessian couples two stages: not in stage form")
+            raise NotStaged("the Hessian couples two stages")
         self._groups: list[tuple[np.ndarray, int]] = []  # (stages, block size)
         slot = np.empty(len(sizes), dtype=np.int64)  # the stage's index in its group
         for size in sorted(set(sizes) - {0}):

@@ -14,16 +14,19 @@ state; the tracking error is measured against it.
 
 A shrinking horizon stops re-solving once less than ``min_horizon`` samples are left: the
 last plan, solved over ``min_horizon`` samples, is applied to the end (status ``hold``).
-A fixed final time with the terminal state prescribed leaves a short horizon no room: the
-plans of a rest-to-rest problem brake at their control bounds in the last samples, so a
-velocity kick there asks for more than the bounds allow and the last NLPs (or QPs) are
-infeasible — measured on the free flyer, the reaction wheels and the quadrotor (exactly the
-steps whose horizon is one or two samples). Relaxing the terminal condition to a penalty
-would change the problem the loop solves, and its weight would trade the final error against
-the bounds case by case; the hold keeps the problem and the final time, and costs at most
-the effect of the last ``min_horizon - 1`` kicks, which no bounded control could remove in the
-time left. The default :data:`MIN_HORIZON` = 1 re-solves at every sample (the last horizon is
-one sample long).
+With the final time fixed and the terminal state prescribed, the last horizons leave no room:
+the plans of a rest-to-rest problem brake at their control bounds near the end, so a kick
+there asks for more than the bounds allow, and a horizon of one sample squeezes all N
+intervals into it. The hold keeps the problem and the final time and costs at most the
+effect of the last ``min_horizon - 1`` kicks, which no bounded control could remove in the
+time left. A penalty on the terminal rows instead would change the problem the loop solves
+and trade the final error against the bounds through a weight. Measured (N = 32, inertia
+x 1.05, kicks of 1e-3): the quadrotor's one infeasible step, the last, goes with
+``min_horizon = 2``; on the free flyer (|u| <= 0.45) and the reaction wheels the problem is
+infeasible from much earlier (from sample 23 and 14 on: the bounds are active over the
+whole rest of the plan), and those steps keep the last plan and count as failed — what they
+need is an exact (L1) penalty on the terminal rows with slack variables, so that a feasible
+problem keeps its solution. The default :data:`MIN_HORIZON` = 1 re-solves at every sample.
 
 The loop is the one the exported C will run: fixed sizes (one NLP, N intervals, for every
 sample of both horizons), the preparation apart from the feedback, the measurement entering
