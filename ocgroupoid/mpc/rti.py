@@ -2,8 +2,9 @@
 
 SQP-RTI (Diehl, Bock, Schlöder, "A real-time iteration scheme for nonlinear optimization in
 optimal feedback control", SIAM J. Control Optim. 43(5), 2005): at each sample one full-step
-SQP iteration with the exact Hessian of the Lagrangian, from the previous iterate shifted by
-one interval. With the initial state embedded (:mod:`~ocgroupoid.mpc.embedding`) it splits:
+SQP iteration with the Hessian of the Lagrangian (exact, or made positive definite stage by
+stage: below), from the previous iterate shifted by one interval. With the initial state
+embedded (:mod:`~ocgroupoid.mpc.embedding`) it splits:
 
 * :meth:`RealTimeIteration.prepare` — before the measurement: evaluate the QP (Hessian,
   gradient, constraint Jacobian and residuals) at the shifted primal-dual point and the
@@ -40,10 +41,11 @@ step of the last two, at 100 iterations each), and both are fixed here:
 
 A QP that fails leaves the iterate where it was (``success`` False).
 
-Theory (Diehl et al. 2005, Thm. 5.3; Zanon et al. 2021): started at the exact solution for a
-predicted state, one RTI step for a measured state ``p̄ + Δ`` lands ``O(|Δ|^2)`` from the
-exact solution for it (the tangential predictor), and along a slowly varying trajectory the
-distance stays of the order of the square of the per-sample change.
+Theory, for the exact Hessian (Diehl et al. 2005, Thm. 5.3; Zanon et al. 2021): started at
+the exact solution for a predicted state, one RTI step for a measured state ``p̄ + Δ`` lands
+``O(|Δ|^2)`` from the exact solution for it (the tangential predictor), and along a slowly
+varying trajectory the distance stays of the order of the square of the per-sample change.
+With a projected block the step is exact only to first order, ``O(|Δ|)``.
 """
 
 from __future__ import annotations
