@@ -22,7 +22,8 @@ control", SIAM J. Optim. 27(3), 2017, §2: the ``project`` strategy acados offer
 with it the exact Hessian's quadratic contraction; the floor ``delta`` is relative to the
 largest entry of H (:data:`FLOOR`). The blocks are gathered from and scattered back to the
 nonzeros with index maps built once; blocks of equal size are decomposed in one batched
-``numpy.linalg.eigh`` call (about 1 ms for 64 stages of 19 variables).
+``numpy.linalg.eigh`` call (the free flyer at N = 64, 64 blocks of 19: 2.5 ms, and 4 ms
+to build the CasADi matrix of the result).
 """
 
 from __future__ import annotations
