@@ -11,6 +11,7 @@ point (:mod:`~ocgroupoid.mpc.shift`), the real-time iteration's prepare/feedback
 from .loop import HORIZONS, mpc
 from .plant import Plant
 from .report import MpcResult, Step
-from .rti import QP_SOLVERS, RealTimeIteration
+from .rti import HESSIANS, QP_SOLVERS, RealTimeIteration
 
-__all__ = ["mpc", "MpcResult", "Step", "Plant", "RealTimeIteration", "HORIZONS", "QP_SOLVERS"]
+__all__ = ["mpc", "MpcResult", "Step", "Plant", "RealTimeIteration", "HORIZONS", "QP_SOLVERS",
+           "HESSIANS"]

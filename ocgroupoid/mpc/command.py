@@ -53,6 +53,10 @@ def mpc_command(
                                        "parameter KEY scaled (e.g. inertia=1.05); repeatable"),
     shrinking: bool = typer.Option(False, "--shrinking", help="fixed final time (the horizon "
                                    "shrinks) instead of a receding horizon"),
+    min_horizon: int = typer.Option(1, "--min-horizon", help="with --shrinking: the shortest "
+                                    "horizon solved, in samples; the last plan is held after"),
+    hessian: str = typer.Option("projected", "--hessian", help="with --rti: the QP's Hessian, "
+                                "projected (each stage block made positive definite) or exact"),
     seed: int = typer.Option(0, "--seed", help="seed of the noise"),
     out_dir: Path = typer.Option(Path("mpc"), "--out", help="folder for mpc.json and mpc.png"),
     set_: list[str] = typer.Option([], "--set", help="Override any key: KEY=VALUE, the value "
@@ -79,6 +83,7 @@ def mpc_command(
         f, d = cfg.file, cfg.file.discretization
         result = mpc(files.build(cfg), N, steps, rti=rti, noise=noise, mismatch=factors,
                      seed=seed, horizon="shrinking" if shrinking else "receding",
+                     min_horizon=min_horizon, hessian=hessian,
                      retraction=d.retraction, rule=d.rule, scheme=d.scheme,
                      ipopt=f.solver.ipopt, backend=f.solver.backend, progress=not quiet)
         out_dir.mkdir(parents=True, exist_ok=True)

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..nlp.transcription import Guess, Transcription
-from .rti import Iterate, RealTimeIteration
+from .rti import HESSIANS, Iterate, RealTimeIteration
 
 
 @dataclass
@@ -67,8 +67,9 @@ class RealTime:
 
     name = "rti"
 
-    def __init__(self, tr: Transcription, qp: str = "hpipm") -> None:
-        self.rti = RealTimeIteration(tr, qp)
+    def __init__(self, tr: Transcription, qp: str = "hpipm", hessian: str = HESSIANS[0]
+                 ) -> None:
+        self.rti = RealTimeIteration(tr, qp, hessian)
         self._guess: Iterate | None = None
 
     def prepare(self, guess: Iterate, p_predicted: np.ndarray) -> float:

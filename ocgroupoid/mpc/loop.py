@@ -12,6 +12,22 @@ T ahead) or shrinks (the final time fixed: the horizon is ``T - t_i``, N interva
 at most N samples). The first plan, the open-loop plan, is solved cold at the nominal initial
 state; the tracking error is measured against it.
 
+A shrinking horizon stops re-solving once less than ``min_horizon`` samples are left: the
+last plan, solved over ``min_horizon`` samples, is applied to the end (status ``hold``).
+With the final time fixed and the terminal state prescribed, the last horizons leave no room:
+the plans of a rest-to-rest problem brake at their control bounds near the end, so a kick
+there asks for more than the bounds allow, and a horizon of one sample squeezes all N
+intervals into it. The hold keeps the problem and the final time and costs at most the
+effect of the last ``min_horizon - 1`` kicks, which no bounded control could remove in the
+time left. A penalty on the terminal rows instead would change the problem the loop solves
+and trade the final error against the bounds through a weight. Measured (N = 32, inertia
+x 1.05, kicks of 1e-3): the quadrotor's one infeasible step, the last, goes with
+``min_horizon = 2``; on the free flyer (|u| <= 0.45) and the reaction wheels the problem is
+infeasible from much earlier (from sample 23 and 14 on: the bounds are active over the
+whole rest of the plan), and those steps keep the last plan and count as failed — what they
+need is an exact (L1) penalty on the terminal rows with slack variables, so that a feasible
+problem keeps its solution. The default :data:`MIN_HORIZON` = 1 re-solves at every sample.
+
 The loop is the one the exported C will run: fixed sizes (one NLP, N intervals, for every
 sample of both horizons), the preparation apart from the feedback, the measurement entering
 only two slices of p.
@@ -38,17 +54,20 @@ from ..solve.replay import terminal_errors
 from ..solve.solver import Solver
 from .controller import Converged, Outcome, RealTime
 from .plant import Plant, mismatched
-from .report import MpcResult, Step
-from .rti import Iterate
+from .report import HOLD, MpcResult, Step
+from .rti import HESSIANS, Iterate
 from .shift import Shift
 from .state import distance, plan_at, with_state
 
 HORIZONS = ("receding", "shrinking")
+#: the shortest horizon a shrinking loop solves, in samples (module docstring)
+MIN_HORIZON = 1
 #: control samples per sample interval in the recorded trajectory (the figure)
 CONTROL_SAMPLES = 8
 
 
-def _check(steps: int, N: int, horizon: str, T_free: bool, sample: float | None) -> None:
+def _check(steps: int, N: int, horizon: str, T_free: bool, sample: float | None,
+           min_horizon: int) -> None:
     if horizon not in HORIZONS:
         raise ConfigError(f"horizon must be {' or '.join(HORIZONS)}, got {horizon!r}")
     if isinstance(steps, bool) or not isinstance(steps, int) or steps < 1:
@@ -59,6 +78,8 @@ def _check(steps: int, N: int, horizon: str, T_free: bool, sample: float | None)
     if T_free:
         raise ConfigError("MPC needs a fixed horizon T; this problem's final time is free: "
                           "fix it (horizon.T) for the loop")
+    if isinstance(min_horizon, bool) or not isinstance(min_horizon, int) or min_horizon < 1:
+        raise ConfigError(f"min_horizon must be a number of samples >= 1, got {min_horizon!r}")
     if sample is not None and not (np.isfinite(sample) and sample > 0):
         raise ConfigError(f"sample must be a time > 0, got {sample!r}")
 
@@ -86,6 +107,7 @@ def _controls_on(ppoly: dict[str, np.ndarray], t: np.ndarray) -> np.ndarray:
 def mpc(problem: Problem, N: int = 32, steps: int | None = None, *, rti: bool = False,
         horizon: str = "receding", noise: float = 0.0, mismatch: dict[str, float] | None = None,
         seed: int = 0, sample: float | None = None, qp: str = "hpipm",
+        hessian: str = HESSIANS[0], min_horizon: int = MIN_HORIZON,
         retraction: str = DEFAULT_RETRACTION, rule: str = DEFAULT_RULE,
         scheme: str = DEFAULT_SCHEME,
         ipopt: dict[str, Any] | None = None, backend: str = DEFAULT_BACKEND,
@@ -93,7 +115,9 @@ def mpc(problem: Problem, N: int = 32, steps: int | None = None, *, rti: bool = 
     """Run ``problem`` in closed loop for ``steps`` samples (module docstring).
 
     ``steps``: default N (shrinking) or 2N (receding). ``rti``: one real-time iteration per
-    sample (:mod:`~ocgroupoid.mpc.rti`, QP solver ``qp``) instead of converged re-solves.
+    sample (:mod:`~ocgroupoid.mpc.rti`, QP solver ``qp``, QP Hessian ``hessian``) instead of
+    converged re-solves. ``min_horizon``: the shortest horizon a shrinking loop solves, in
+    samples (module docstring).
     ``noise``: the standard deviation of the velocity kicks after each sample; ``mismatch``:
     the plant's parameters scaled (``{"inertia": 1.05}``); ``seed``: the noise's generator.
     ``sample``: the sampling time (default T/N). ``progress``: a rich progress bar (True) or
@@ -101,7 +125,7 @@ def mpc(problem: Problem, N: int = 32, steps: int | None = None, *, rti: bool = 
     open-loop plan does not solve.
     """
     K = steps if steps is not None else (N if horizon == "shrinking" else 2 * N)
-    _check(K, N, horizon, problem.T_free, sample)
+    _check(K, N, horizon, problem.T_free, sample, min_horizon)
     mismatch = dict(mismatch or {})
     solver = Solver(problem, Method(N, scheme=scheme, retraction=retraction, rule=rule),
                     SolverOptions(backend=backend, ipopt=dict(ipopt or {})))
@@ -113,7 +137,7 @@ def mpc(problem: Problem, N: int = 32, steps: int | None = None, *, rti: bool = 
         raise ConfigError(f"a shrinking horizon ends at T = {T:g}: {K} samples of {h:g} pass it")
     plant = Plant(tr, mismatched(tr, p, mismatch), noise, seed)
     shift = Shift(tr)
-    law = RealTime(tr, qp) if rti else Converged(tr)
+    law = RealTime(tr, qp, hessian) if rti else Converged(tr)
     G = tr.problem.groupoid
     ns = G.state_size
     z = np.concatenate([np.concatenate([f.state_of_target(tr.part(p, "start")[ts])
@@ -143,11 +167,13 @@ def mpc(problem: Problem, N: int = 32, steps: int | None = None, *, rti: bool = 
         for i in range(1, K + 1):
             # preparation: the next problem, the last plan moved by one sample
             T_next = T_now - h if horizon == "shrinking" else T_now
+            solving = i < K and (horizon == "receding" or T_next > (min_horizon - 1e-9) * h)
             tp = time.perf_counter()
-            p_next = p.copy()
-            p_next[tr.layout.p_slices["T"]] = T_next
-            guess = shift(it, shift.sigma(h, T_now, T_next))
-            law.prepare(guess, with_state(tr, p_next, *plan_at(tr, out, offset + h)))
+            if solving:
+                p_next = p.copy()
+                p_next[tr.layout.p_slices["T"]] = T_next
+                guess = shift(it, shift.sigma(h, T_now, T_next))
+                law.prepare(guess, with_state(tr, p_next, *plan_at(tr, out, offset + h)))
             prepare_seconds = time.perf_counter() - tp
             # the plant runs one sample under the current plan
             z = plant.advance(z, ppoly, offset, offset + h)
@@ -157,15 +183,18 @@ def mpc(problem: Problem, N: int = 32, steps: int | None = None, *, rti: bool = 
                 break
             # feedback: the measured state in, the next plan out
             tf = time.perf_counter()
-            p = with_state(tr, p_next, z[:ns], z[ns:])
-            done: Outcome = law.feedback(p)
-            if done.success:  # the new plan
+            if solving:
+                p = with_state(tr, p_next, z[:ns], z[ns:])
+                done = law.feedback(p)
+            else:
+                done = Outcome(it, True, HOLD, 0, 0.0)
+            if solving and done.success:  # the new plan
                 it, offset = done.iterate, 0.0
                 out = tr.readout(it.x, p, it.lam_g)
                 ppoly = control_ppoly(out)
                 violation = _bound_violation(tr, it.x, p, ineq)
-            else:  # the last plan goes on; the next step starts from its shifted point
-                it, offset = guess, offset + h
+            else:  # the last plan goes on (a failed step starts the next from its shift)
+                it, offset = (guess if solving else it), offset + h
             feedback_seconds = time.perf_counter() - tf
             U.append(_controls_on(ppoly, offset + np.linspace(0, h, CONTROL_SAMPLES + 1)))
             reference = np.concatenate(plan_at(tr, plan, i * h))
@@ -180,6 +209,7 @@ def mpc(problem: Problem, N: int = 32, steps: int | None = None, *, rti: bool = 
                                for i in range(len(U))])
     settings = {"N": N, "steps": K, "sample": h, "T": T, "horizon": horizon,
                 "mode": "rti" if rti else "converged", "qp": qp if rti else None,
+                "hessian": hessian if rti else None, "min_horizon": min_horizon,
                 "backend": backend, "noise": noise, "mismatch": mismatch, "seed": seed,
                 "scheme": scheme, "retraction": retraction}
     return MpcResult(problem.name, settings, records, np.array(ts), np.array(Z), sample_t,

@@ -8,7 +8,8 @@ control), ``iterations`` (IPOPT's, or the QP's for a real-time iteration), ``sta
 groupoid: :func:`~ocgroupoid.mpc.state.distance`) and its largest entry, ``bound_violation``
 (the largest violation of the NLP's bounds at the points where they are imposed, by the plan
 solved at t_i) and ``control`` (the control applied at t_i). The summary's timing statistics
-are over the warm steps (i >= 1).
+are over the warm steps (i >= 1) that solved something: the steps of a shrinking horizon
+that hold the last plan (status :data:`HOLD`) take no time and are left out.
 """
 
 from __future__ import annotations
@@ -19,6 +20,9 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+#: the status of a step that applies the last plan without solving
+HOLD = "hold"
 
 
 @dataclass
@@ -87,15 +91,20 @@ class MpcResult:
         return max([s.tracking_error_max for s in self.steps] +
                    list(self.final_tracking_error.values()))
 
+    @property
+    def warm(self) -> list[Step]:
+        """The steps after the first that solved (held steps left out)."""
+        return [s for s in self.steps[1:] if s.status != HOLD]
+
     def timing(self) -> dict[str, dict[str, float]]:
         """Statistics of the warm steps' times (:func:`percentiles`)."""
-        warm = self.steps[1:]
+        warm = self.warm
         return {"step": percentiles([s.step_seconds for s in warm]),
                 "prepare": percentiles([s.prepare_seconds for s in warm]),
                 "feedback": percentiles([s.feedback_seconds for s in warm])}
 
     def summary(self) -> dict[str, Any]:
-        warm = self.steps[1:]
+        warm = self.warm
         return {"steps": len(self.steps), "failed_steps": self.failed_steps,
                 "terminal_error": self.terminal_error,
                 "tracking_error_max": self.tracking_error_max,
