@@ -31,8 +31,9 @@ from ..groupoid import LieGroupFactor
 from ..lie import se3
 from ..lie.se3 import SE3
 from ..model.problem import GuessContext, Problem
-from ..model.values import Pose, Positive3, PositiveNumber, Strict, Vector6Free
+from ..model.values import Positive3, PositiveNumber, Strict
 from .registry import ModelSpec, register
+from .rigid_body_se3 import Final, Initial  # the same pose and twist as the free flyer
 
 MASS = 1.0
 INERTIA = (0.05, 0.05, 0.09)
@@ -112,16 +113,6 @@ class Parameters(Strict):
     f_max: PositiveNumber = Field(F_MAX, description="largest thrust (> 0)")
     tau_max: PositiveNumber = Field(TAU_MAX, description="largest body torque about each "
                                     "axis (> 0)")
-
-
-class Initial(Strict):
-    g: Pose = Field(description="initial pose")
-    xi: Vector6Free | None = Field(None, description="initial body twist (omega, v)")
-
-
-class Final(Strict):
-    g: Pose | None = Field(None, description="final pose (left out: free)")
-    xi: Vector6Free | None = Field(None, description="final body twist (omega, v)")
 
 
 def _build(params: BaseModel, initial: BaseModel, final: BaseModel, T: float,
