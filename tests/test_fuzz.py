@@ -240,8 +240,8 @@ def mutants(path: Path, count: int, seed: int = SEED, mild: bool = False) -> lis
     return [m(mild) for _ in range(count)]
 
 
-def outcome(tmp_path: Path, mutant: Mutant, *args: str, command: str = "check"
-            ) -> tuple[int, str, float]:
+def outcome(tmp_path: Path, mutant: Mutant, *args: str, command: str = "check",
+            limit: float = 10.0) -> tuple[int, str, float]:
     f = tmp_path / "mutant.yaml"
     f.write_text(mutant.text)
     t0 = time.perf_counter()
@@ -255,7 +255,7 @@ def outcome(tmp_path: Path, mutant: Mutant, *args: str, command: str = "check"
         problems.append(f"exit code {r.exit_code}")
     if mutant.known_bad and r.exit_code == 0:
         problems.append("a known-bad input was accepted")
-    if seconds > 10:
+    if seconds > limit:
         problems.append(f"took {seconds:.1f} s")
     tail = " ".join(r.output.split())[-300:]
     return r.exit_code, "; ".join(problems) + (f" :: {tail}" if problems else ""), seconds
@@ -336,7 +336,9 @@ def test_N_5000_is_checked_or_refused_within_its_estimate(name: str, tmp_path) -
     mutant = Mutant("N = 5000", dump({**Mutator(problem, 0).base,
                                       "horizon": {**Mutator(problem, 0).base["horizon"],
                                                   "N": 5000}}), False)
-    code, trouble, seconds = outcome(tmp_path, mutant)
+    # the budget this test states for N = 5000 (order4, the files' default scheme, builds
+    # three times order2's variables), not the 10 s of a fuzzed file at its own N
+    code, trouble, seconds = outcome(tmp_path, mutant, limit=30.0)
     assert code == 0 and not trouble and seconds < 30, (code, trouble, seconds)
     (tmp_path / "mutant.yaml").write_text(mutant.text)
     t0 = time.perf_counter()
