@@ -94,25 +94,19 @@ def _validator(func: Any) -> str:
     return text[0].lower() + text[1:]
 
 
+#: how each annotated-types constraint reads in the reference
+_BOUNDS: dict[type, Any] = {
+    at.Ge: lambda m: f">= {m.ge}", at.Gt: lambda m: f"> {m.gt}",
+    at.Le: lambda m: f"<= {m.le}", at.Lt: lambda m: f"< {m.lt}",
+    at.MinLen: lambda m: f"at least {m.min_length} items",
+    at.MaxLen: lambda m: f"at most {m.max_length} items",
+}
+
+
 def _constraints(meta: list[Any]) -> list[str]:
     """The range a field's metadata states (``ge``, ``le``, lengths, validators)."""
-    out: list[str] = []
-    for m in meta:
-        if isinstance(m, BeforeValidator):
-            out.append(_validator(m.func))
-        elif isinstance(m, at.Ge):
-            out.append(f">= {m.ge}")
-        elif isinstance(m, at.Gt):
-            out.append(f"> {m.gt}")
-        elif isinstance(m, at.Le):
-            out.append(f"<= {m.le}")
-        elif isinstance(m, at.Lt):
-            out.append(f"< {m.lt}")
-        elif isinstance(m, at.MinLen):
-            out.append(f"at least {m.min_length} items")
-        elif isinstance(m, at.MaxLen):
-            out.append(f"at most {m.max_length} items")
-    return out
+    return [_validator(m.func) if isinstance(m, BeforeValidator) else _BOUNDS[type(m)](m)
+            for m in meta if isinstance(m, BeforeValidator) or type(m) in _BOUNDS]
 
 
 def type_text(tp: Any) -> tuple[str, list[str]]:

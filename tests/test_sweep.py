@@ -52,16 +52,6 @@ runner = CliRunner()
 
 
 @pytest.fixture(scope="module")
-def client() -> Iterator[Any]:
-    """A LocalCluster as `sweep` makes one (processes, one thread each), two workers."""
-    from distributed import Client, LocalCluster
-
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                      dashboard_address=None) as cluster, Client(cluster) as c:
-        yield c
-
-
-@pytest.fixture(scope="module")
 def so3_sweep(client: Any, tmp_path_factory: pytest.TempPathFactory) -> tuple[pd.DataFrame, Path]:
     out = tmp_path_factory.mktemp("so3") / "sweep"
     return og.sweep(SO3, GRID, overrides=SETS, out=out, client=client), out

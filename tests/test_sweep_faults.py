@@ -9,7 +9,7 @@ import json
 import multiprocessing
 import sys
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any
 
 import pandas as pd
 import pytest
@@ -25,16 +25,6 @@ SO3 = ROOT / "problems" / "so3_rest_to_rest.yaml"
 SETS = ["horizon.N=16"]
 ANGLES = "final.R.axis_angle.angle"
 runner = CliRunner()
-
-
-@pytest.fixture(scope="module")
-def client() -> Iterator[Any]:
-    """Two worker processes, one thread each, as `sweep` makes them."""
-    from distributed import Client, LocalCluster
-
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                      dashboard_address=None) as cluster, Client(cluster) as c:
-        yield c
 
 
 def one_line(text: str) -> str:
