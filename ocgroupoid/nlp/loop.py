@@ -194,7 +194,8 @@ def distance_function(tr: Transcription, name: str = "distance") -> ca.Function:
     ns, nz = G.state_size, G.state_size + G.algebra_dim
     a, b = ca.SX.sym("a", nz), ca.SX.sym("b", nz)
     sa, sb = (_states(tr, _packed(tr, v[:ns])) for v in (a, b))
-    d = [ca.norm_2(f.rminus(sa[ss], sb[ss])) for f, ss in zip(G.factors, G.state_layout.slices)]
+    d: list[Any] = [ca.norm_2(f.rminus(sa[ss], sb[ss]))
+                    for f, ss in zip(G.factors, G.state_layout.slices)]
     d += [ca.norm_2(a[ns:][vs] - b[ns:][vs]) for vs in G.velocity_layout.slices]
     return ca.Function(name, [a, b], [ca.vertcat(*d)], ["a", "b"], ["d"])
 
