@@ -115,7 +115,7 @@ class Export:
     n_values: int  # numbers of a parameter file
     binary: Path | None  # DIR/solve when built
     solver: Solver
-    mpc: Path | None = None  # DIR/mpc when the closed loop was written and built
+    mpc: Path | None = None  # DIR/mpc (built with the export's build) when the loop was written
 
 
 def _c_string(s: str) -> str:
@@ -392,6 +392,6 @@ def export_c(problem: Problem | Solver, folder: str | Path, N: int | None = None
     folder.mkdir(parents=True, exist_ok=True)
     _write_all(folder, files)
     binary = make(folder, cflags) if build else None
-    driver = make(folder, cflags, "mpc") if build and loop else None
+    driver = (make(folder, cflags, "mpc") if build else folder / "mpc") if loop else None
     return Export(folder, pb.name, tr.N, tr.nx, tr.np, tr.ng, tr.values.size, binary, solver,
                   driver)
