@@ -202,7 +202,7 @@ def distance_function(tr: Transcription, name: str = "distance") -> ca.Function:
 
 def terminal_names(tr: Transcription) -> list[str]:
     """The entries of :func:`terminal_function` (those of
-    :func:`~ocgroupoid.solve.replay.terminal_errors`)."""
+    :func:`~ocgroupoid.verify.replay.terminal_errors`)."""
     G, m = tr.problem.groupoid, tr.masks
     names = [f.state for f, mask in zip(G.factors, m.end_state) if mask.any()]
     if tr.problem.end_velocities:
@@ -212,7 +212,7 @@ def terminal_names(tr: Transcription) -> list[str]:
 
 
 def terminal_function(tr: Transcription, name: str = "terminal") -> ca.Function:
-    """``(z, p) -> errors``: :func:`~ocgroupoid.solve.replay.terminal_errors` as a Function
+    """``(z, p) -> errors``: :func:`~ocgroupoid.verify.replay.terminal_errors` as a Function
     (:func:`terminal_names`): the final state's distance from p's targets over the
     prescribed components."""
     G, m = tr.problem.groupoid, tr.masks
