@@ -284,7 +284,7 @@ def test_continuation_reports_a_grid_that_lands_above_the_coarse_minimum(monkeyp
     """The first interpolation onto the fine grid is spoiled (the long way round): the fine
     grid lands above the minimum the coarse grid found; the solver bridges through the
     doublings, keeps the better solution and says so."""
-    from ocgroupoid.solve import solver as solver_module
+    from ocgroupoid.solve import compiled as solver_module
     from ocgroupoid.systems.rigid_body import rigid_body
 
     real = solver_module.interpolate
