@@ -1,7 +1,7 @@
 """The plant's state ``z = (s, y)`` against the NLP: parameters, plans and distances.
 
 A measured state enters the NLP as its initial-state parameters (p's ``start`` and ``V0``,
-:mod:`~ocgroupoid.mpc.embedding`); a plan is read at any time by interpolating its node
+:mod:`~ocgroupoid.nlp.embedding`); a plan is read at any time by interpolating its node
 states and velocities; the distance between two states is taken on the groupoid, factor by
 factor (:meth:`~ocgroupoid.groupoid.base.Factor.terminal_error` over every component: the
 rotation angle of ``R_a^T R_b`` on SO(3), the norm of the twist's log on SE(3), the Euclidean

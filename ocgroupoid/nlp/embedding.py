@@ -18,8 +18,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ConfigError
-from ..nlp.assembly import Block
-from ..nlp.transcription import Transcription
+from .assembly import Block
+from .transcription import Transcription
 
 #: the slices of p the plant measures
 MEASURED = ("start", "V0")
