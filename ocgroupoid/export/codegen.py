@@ -362,12 +362,13 @@ def export_c(problem: Problem | CompiledProblem, folder: str | Path, N: int | No
     p = tr.pack()
     names = {"prefix": prefix, "PREFIX": prefix.upper(), "VERSION": __version__}
     loop = closed_loop.wanted(tr, mpc)
+    real_time = closed_loop.rti(tr, prefix) if loop else None
     files: dict[str, str | bytes] = dict(generate(
         tr, solver.ipopt, prefix, _render("prelude.c.in", names),
-        closed_loop.functions(tr, p, prefix) if loop else ()))
+        closed_loop.functions(tr, p, prefix, real_time) if loop else ()))
     guess = tr.guess_labels[0]  # what the C solver starts from
     model = {**names, **model_values(tr, p, guess, positive),
-             **(closed_loop.values(tr) if loop else {})}
+             **(closed_loop.values(tr, real_time) if loop else {})}
     for name in PREFIXED + (closed_loop.PREFIXED if loop else ()):
         files[prefix + name] = _render(f"{name}.in", model)
     files["main.c"] = _render("main.c.in", names)
@@ -383,7 +384,7 @@ def export_c(problem: Problem | CompiledProblem, folder: str | Path, N: int | No
             "BACKEND_LIBS": BACKEND_LIBS[tr.backend], "KEYS": _blocks_table(tr.values)}
     files["Makefile"] = _render("Makefile.in", {
         **info, "IPOPT_LIB": _make_value(lib), "IPOPT_INCLUDE": _make_value(include),
-        **closed_loop.make_values(prefix, loop)})
+        **closed_loop.make_values(prefix, loop, real_time is not None)})
     files["README.md"] = _render("README.md.in", info)
     files["params.txt"] = params_text(tr.values, tr.values.values_of(p), (
         f"{plain_name(pb.name)}: the exported instance (N={tr.N}, {tr.disc.retraction}). "

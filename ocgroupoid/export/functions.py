@@ -22,6 +22,7 @@ from typing import Any, Sequence
 
 import casadi as ca
 
+from ..errors import ExportError
 from ..nlp.program import C_READOUT_OUTPUTS
 from ..nlp.transcription import Transcription
 from ..verify.diagnostics import replay_of
@@ -120,7 +121,7 @@ def generate(tr: Transcription, ipopt: dict[str, Any] | None, prefix: str,
         with tempfile.TemporaryDirectory(prefix="ocgroupoid-export-") as tmp:
             cg.generate(tmp + "/")
             c, h = (Path(tmp) / f"{name}.{ext}" for ext in ("c", "h"))
-            out[c.name] = prelude + _empty_copies(c.read_text())
+            out[c.name] = prelude + hpipm_defaults(_empty_copies(c.read_text()))
             out[h.name] = h.read_text()
     return out
 
@@ -134,3 +135,24 @@ _EMPTY_COPY = re.compile(r"casadi_copy\(0, 0, 0\+ i\*0\);")
 def _empty_copies(source: str) -> str:
     """Generated C without the empty copies of :data:`_EMPTY_COPY`."""
     return _EMPTY_COPY.sub("/* an empty copy */", source)
+
+
+#: CasADi 3.8's generated HPIPM call writes HPIPM's options field by field into a struct
+#: that was never initialised, and leaves five fields out (``dual_gap_max``, ``lam0_min``,
+#: ``t0_min``, ``t0_init``, ``update_fact_exit``): measured, a QP then ran to its iteration
+#: limit and reported failure. CasADi's own interface sets HPIPM's defaults of the mode first.
+_HPIPM_OPTIONS = re.compile(r"^(\s*)(\w+)\.hpipm_options\.mu0 = ", re.M)
+_HPIPM_MODE = re.compile(r"\.hpipm_options\.mode = (\d+);")
+
+
+def hpipm_defaults(source: str) -> str:
+    """Generated C whose HPIPM options start from HPIPM's defaults of their mode
+    (``d_ocp_qp_ipm_arg_set_default``; :data:`_HPIPM_OPTIONS`); other code unchanged."""
+    def first(m: re.Match[str]) -> str:
+        mode = _HPIPM_MODE.search(source, m.end())
+        if mode is None:
+            raise ExportError("CasADi's generated HPIPM call sets no mode: this CasADi's "
+                              "code generation is not the one the export knows (3.8)")
+        return (f"{m.group(1)}d_ocp_qp_ipm_arg_set_default((enum hpipm_mode){mode.group(1)}, "
+                f"&{m.group(2)}.hpipm_options);\n{m.group(0)}")
+    return _HPIPM_OPTIONS.sub(first, source)

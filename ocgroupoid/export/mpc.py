@@ -9,6 +9,17 @@ p, the initial state of p, distances, terminal errors and the bound violation.
 
 An export writes the loop when the problem has one (:func:`reason`): a fixed final time and
 continuous second-order dynamics, as Python's loop requires.
+
+Real-time iterations (``@prefix@mpc_set_rti``, ``DIR/mpc --rti``): with an NLP in stage form,
+the Functions of :class:`~ocgroupoid.nlp.rti.RtiFunctions` (the preparation, the bounds fixed
+at the measured state, HPIPM's QP, the full step), which Python's ``og.mpc(rti=True)``
+evaluates, are generated too, and the driver links HPIPM and blasfeo from the casadi wheel.
+The C loop takes the exact Hessian (Python's ``hessian="exact"``): the stage projection of
+``hessian="projected"`` is numpy's eigendecomposition, which has no CasADi counterpart to
+generate. CasADi 3.8's generated HPIPM call leaves five of HPIPM's options unset (among them
+``dual_gap_max``, so a QP ran to its iteration limit);
+:func:`~ocgroupoid.export.functions.hpipm_defaults` sets HPIPM's defaults of the mode first,
+as CasADi's own interface does.
 """
 
 from __future__ import annotations
@@ -34,6 +45,7 @@ from ..nlp.loop import (
     with_state_function,
 )
 from ..nlp.program import C_READOUT_OUTPUTS
+from ..nlp.rti import RtiFunctions
 from ..nlp.stageform import stage_form
 from ..nlp.transcription import Transcription
 
@@ -62,8 +74,19 @@ def wanted(tr: Transcription, mpc: bool | None) -> bool:
     return mpc is not False and why is None
 
 
-def functions(tr: Transcription, p: np.ndarray, prefix: str) -> list[ca.Function]:
-    """The loop's Functions (:mod:`ocgroupoid.nlp.loop`), named ``{prefix}gen_...``."""
+def rti(tr: Transcription, prefix: str) -> RtiFunctions | None:
+    """The real-time iteration's Functions, named ``{prefix}gen_rti_...``, or None when the
+    problem has none (its NLP is not a chain of stages, its initial state not prescribed)."""
+    try:
+        return RtiFunctions(tr, name=f"{prefix}gen_rti_")
+    except ConfigError:
+        return None
+
+
+def functions(tr: Transcription, p: np.ndarray, prefix: str,
+              real_time: RtiFunctions | None) -> list[ca.Function]:
+    """The loop's Functions (:mod:`ocgroupoid.nlp.loop`), named ``{prefix}gen_...``, and those
+    of ``real_time`` (:func:`rti`)."""
     m = len(tr.problem.controls)
     k = _coefficients(tr) // max(m, 1)
     G = tr.problem.groupoid
@@ -78,7 +101,9 @@ def functions(tr: Transcription, p: np.ndarray, prefix: str) -> list[ca.Function
             shift_function(tr, sf, sigma, n + "shift"), with_state_function(tr, n + "with_state"),
             initial_state(tr, n + "initial_state"), distance_function(tr, n + "distance"),
             terminal_function(tr, n + "terminal"),
-            violation_function(tr, tr.rows(Kind.INEQUALITY).ravel(), n + "violation")]
+            violation_function(tr, tr.rows(Kind.INEQUALITY).ravel(), n + "violation")
+            ] + ([] if real_time is None else [real_time.prepare, real_time.fix,
+                                               real_time.solver, real_time.update])
 
 
 def _coefficients(tr: Transcription) -> int:
@@ -92,19 +117,28 @@ def _names(names: list[str]) -> str:
     return "{" + (", ".join(f'"{n}"' for n in names) or "0") + "}"
 
 
-def values(tr: Transcription) -> dict[str, Any]:
+def values(tr: Transcription, real_time: RtiFunctions | None) -> dict[str, Any]:
     """What mpc.h.in and mpc.c.in are filled with."""
     G, P = tr.problem.groupoid, tr.layout.p_slices["P"]
+    sizes = {"MPC_RTI": 0, "MPC_RTI_NZ": 1, "MPC_RTI_NROWS": 1, "MPC_RTI_NE": 1,
+             "MPC_RTI_NNZ_H": 1, "MPC_RTI_NNZ_A": 1}
+    if real_time is not None:
+        out = real_time.prepare.sparsity_out
+        sizes = {"MPC_RTI": 1, "MPC_RTI_NZ": real_time.form.nz,
+                 "MPC_RTI_NROWS": int(real_time.form.order.size),
+                 "MPC_RTI_NE": real_time.embedding.ne, "MPC_RTI_NNZ_H": out(1).nnz(),
+                 "MPC_RTI_NNZ_A": out(3).nnz()}
     return {"MPC_NZ": G.state_size + G.algebra_dim, "MPC_NS": G.state_size,
             "MPC_NP_PLANT": P.stop - P.start, "MPC_P_OFFSET": P.start,
             "MPC_N_DISTANCES": len(distance_names(tr)), "MPC_N_TERMINAL": len(terminal_names(tr)),
             "MPC_DISTANCE_NAMES": _names(distance_names(tr)),
             "MPC_TERMINAL_NAMES": _names(terminal_names(tr)),
-            "MPC_PIECE_COEFFICIENTS": max(_coefficients(tr), 1)}
+            "MPC_PIECE_COEFFICIENTS": max(_coefficients(tr), 1), **sizes}
 
 
-def make_values(prefix: str, on: bool) -> dict[str, str]:
-    """The Makefile's lines of the loop: its objects, headers and the driver's rule."""
+def make_values(prefix: str, on: bool, real_time: bool) -> dict[str, str]:
+    """The Makefile's lines of the loop: its objects, headers and the driver's rule (linked
+    with HPIPM and blasfeo for ``real_time``)."""
     if not on:
         return {"MPC_OBJECTS": "", "MPC_HEADERS": "", "MPC_ALL": "", "MPC_RULE": "",
                 "MPC_CLEAN": ""}
@@ -113,5 +147,6 @@ def make_values(prefix: str, on: bool) -> dict[str, str]:
             "MPC_RULE": ("# The closed loop (README.md, The closed loop): ./mpc --steps K ...\n"
                          "mpc: mpc_main.o @prefix@params.o libocg.a\n"
                          "\t$(CC) $(OPT) $(CFLAGS) $(LDFLAGS) -o $@ mpc_main.o @prefix@params.o "
-                         "libocg.a $(OCG_LDLIBS) $(LDLIBS)\n").replace("@prefix@", prefix),
+                         "libocg.a $(OCG_LDLIBS)@RTI_LIBS@ $(LDLIBS)\n").replace("@prefix@", prefix)
+                         .replace("@RTI_LIBS@", " -lhpipm -lblasfeo" if real_time else ""),
             "MPC_CLEAN": " mpc mpc_main.o"}
