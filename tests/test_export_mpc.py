@@ -4,7 +4,9 @@ The rigid body on SO(3) of tests/test_mpc.py (so3_rest_to_rest, N = 16, |u_i| <=
 its plant's inertia 5 % larger, no noise, receding horizon, converged re-solves: C runs the
 same arithmetic (the Functions of ocgroupoid.nlp.loop, generated) and the same IPOPT from
 the same points, so its applied controls are Python's to 1e-8 (measured: equal to the bit;
-IPOPT's tol is the default 1e-10 in both).
+IPOPT's tol is the default 1e-10 in both). With --rti the C loop takes one real-time iteration
+per sample on the generated Functions of ocgroupoid.nlp.rti and HPIPM's generated QP:
+Python's og.mpc(rti=True, hessian="exact") (measured: equal to the bit).
 """
 
 from __future__ import annotations
@@ -84,6 +86,33 @@ def test_c_loop_reaches_the_target_like_python(runs: tuple[og.MpcResult, dict]) 
     assert set(c["steps"][0]) == set(py.steps[0].as_dict()) | {"tracking_error_max"}
     timing = s["timing"]["step"]
     assert timing["count"] == STEPS - 1 and 0 < timing["median"] <= timing["max"]
+
+
+@pytest.fixture(scope="module")
+def rti_runs(problem: og.Problem, driver: Path) -> tuple[og.MpcResult, dict]:
+    r = subprocess.run([str(driver), "--steps", str(STEPS), "--mismatch", "inertia=1.05",
+                        "--rti"], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    return (og.mpc(problem, N, STEPS, mismatch=MISMATCH, rti=True, hessian="exact"),
+            json.loads(r.stdout))
+
+
+def test_c_rti_loop_applies_pythons_controls(rti_runs: tuple[og.MpcResult, dict]) -> None:
+    """The first 20 controls of C's real-time iterations are Python's (rti=True, the exact
+    Hessian: what C takes) to 1e-8, and so are the plant's states; every QP solved in both
+    (in C only with HPIPM's defaults set: export.functions.hpipm_defaults); the settings say
+    rti."""
+    py, c = rti_runs
+    u_py = np.array([s.control for s in py.steps])[:COMPARED]
+    u_c = np.array([s["control"] for s in c["steps"]])[:COMPARED]
+    assert u_c.shape == u_py.shape == (COMPARED, 3)
+    assert np.max(np.abs(u_c - u_py)) <= TOL
+    assert np.max(np.abs(np.array(c["trajectory"]["z"]) - py.z)) <= TOL
+    assert [s["status"] for s in c["steps"]] == [s.status for s in py.steps]
+    assert c["summary"]["failed_steps"] == 0 == py.failed_steps
+    assert (c["settings"]["mode"], c["settings"]["qp"], c["settings"]["hessian"]) == (
+        "rti", "hpipm", "exact")
+    assert c["summary"]["terminal_error"]["R"] < 0.05
 
 
 def test_c_driver_refuses_bad_input(driver: Path) -> None:

@@ -130,7 +130,7 @@ class RealTimeIteration:
             r = self.solver(h=H, g=q["g"], a=q["A"], lba=q["lba"], uba=q["uba"], lbx=lbx,
                             ubx=ubx)
             stats = self.solver.stats()
-            ok = bool(stats.get("success", False)) and bool(np.all(np.isfinite(r["x"])))
+            ok = bool(stats.get("success", False)) and bool(np.all(np.isfinite(np.array(r["x"]))))
             if ok or projected:
                 break
             H, projected = self.project(H), True
