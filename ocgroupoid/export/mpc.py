@@ -141,12 +141,13 @@ def make_values(prefix: str, on: bool, real_time: bool) -> dict[str, str]:
     with HPIPM and blasfeo for ``real_time``)."""
     if not on:
         return {"MPC_OBJECTS": "", "MPC_HEADERS": "", "MPC_ALL": "", "MPC_RULE": "",
-                "MPC_CLEAN": ""}
+                "MPC_CLEAN": "", "MPC_LDLIBS": ""}
     return {"MPC_OBJECTS": f" {prefix}mpc.o {prefix}generated_mpc.o",
             "MPC_HEADERS": f" {prefix}mpc.h {prefix}generated_mpc.h", "MPC_ALL": " mpc",
             "MPC_RULE": ("# The closed loop (README.md, The closed loop): ./mpc --steps K ...\n"
                          "mpc: mpc_main.o @prefix@params.o libocg.a\n"
                          "\t$(CC) $(OPT) $(CFLAGS) $(LDFLAGS) -o $@ mpc_main.o @prefix@params.o "
-                         "libocg.a $(OCG_LDLIBS)@RTI_LIBS@ $(LDLIBS)\n").replace("@prefix@", prefix)
-                         .replace("@RTI_LIBS@", " -lhpipm -lblasfeo" if real_time else ""),
-            "MPC_CLEAN": " mpc mpc_main.o"}
+                         "libocg.a $(OCG_LDLIBS) $(MPC_LDLIBS) $(LDLIBS)\n"
+                         ).replace("@prefix@", prefix),
+            "MPC_CLEAN": " mpc mpc_main.o",
+            "MPC_LDLIBS": " -lhpipm -lblasfeo" if real_time else ""}
