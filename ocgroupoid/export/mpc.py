@@ -14,12 +14,11 @@ Real-time iterations (``@prefix@mpc_set_rti``, ``DIR/mpc --rti``): with an NLP i
 the Functions of :class:`~ocgroupoid.nlp.rti.RtiFunctions` (the preparation, the bounds fixed
 at the measured state, HPIPM's QP, the full step), which Python's ``og.mpc(rti=True)``
 evaluates, are generated too, and the driver links HPIPM and blasfeo from the casadi wheel.
-The C loop takes the exact Hessian (Python's ``hessian="exact"``): the stage projection of
-``hessian="projected"`` is numpy's eigendecomposition, which has no CasADi counterpart to
-generate. CasADi 3.8's generated HPIPM call leaves five of HPIPM's options unset (among them
-``dual_gap_max``, so a QP ran to its iteration limit);
-:func:`~ocgroupoid.export.functions.hpipm_defaults` sets HPIPM's defaults of the mode first,
-as CasADi's own interface does.
+The stage projection of ``hessian="projected"`` (in Python numpy's eigendecomposition, which
+has no CasADi operation to generate) is the template's C: Jacobi rotations. CasADi 3.8's
+generated HPIPM call leaves five of HPIPM's options unset (among them ``dual_gap_max``, so a
+QP ran to its iteration limit); :func:`~ocgroupoid.export.functions.hpipm_defaults` sets
+HPIPM's defaults of the mode first, as CasADi's own interface does.
 """
 
 from __future__ import annotations
@@ -45,7 +44,7 @@ from ..nlp.loop import (
     with_state_function,
 )
 from ..nlp.program import C_READOUT_OUTPUTS
-from ..nlp.rti import RtiFunctions
+from ..nlp.rti import FLOOR, RtiFunctions
 from ..nlp.stageform import stage_form
 from ..nlp.transcription import Transcription
 
@@ -121,13 +120,16 @@ def values(tr: Transcription, real_time: RtiFunctions | None) -> dict[str, Any]:
     """What mpc.h.in and mpc.c.in are filled with."""
     G, P = tr.problem.groupoid, tr.layout.p_slices["P"]
     sizes = {"MPC_RTI": 0, "MPC_RTI_NZ": 1, "MPC_RTI_NROWS": 1, "MPC_RTI_NE": 1,
-             "MPC_RTI_NNZ_H": 1, "MPC_RTI_NNZ_A": 1}
+             "MPC_RTI_NNZ_H": 1, "MPC_RTI_NNZ_A": 1, "MPC_RTI_BLOCKS": "{1}",
+             "MPC_RTI_MAX_BLOCK": 1, "MPC_RTI_FLOOR": repr(FLOOR)}
     if real_time is not None:
         out = real_time.prepare.sparsity_out
         sizes = {"MPC_RTI": 1, "MPC_RTI_NZ": real_time.form.nz,
                  "MPC_RTI_NROWS": int(real_time.form.order.size),
                  "MPC_RTI_NE": real_time.embedding.ne, "MPC_RTI_NNZ_H": out(1).nnz(),
-                 "MPC_RTI_NNZ_A": out(3).nnz()}
+                 "MPC_RTI_NNZ_A": out(3).nnz(), "MPC_RTI_FLOOR": repr(FLOOR),
+                 "MPC_RTI_BLOCKS": "{" + ", ".join(map(str, real_time.stage_sizes)) + "}",
+                 "MPC_RTI_MAX_BLOCK": max(max(real_time.stage_sizes), 1)}
     return {"MPC_NZ": G.state_size + G.algebra_dim, "MPC_NS": G.state_size,
             "MPC_NP_PLANT": P.stop - P.start, "MPC_P_OFFSET": P.start,
             "MPC_N_DISTANCES": len(distance_names(tr)), "MPC_N_TERMINAL": len(terminal_names(tr)),

@@ -20,10 +20,11 @@ convexification procedure for indefinite quadratic programs arising in direct op
 control", SIAM J. Optim. 27(3), 2017, §2: the ``project`` strategy acados offers beside
 ``mirror`` and ``convexify``). A block that is already positive definite is kept exactly,
 with it the exact Hessian's quadratic contraction; the floor ``delta`` is relative to the
-largest entry of H (:data:`FLOOR`). The blocks are gathered from and scattered back to the
-nonzeros with index maps built once; blocks of equal size are decomposed in one batched
-``numpy.linalg.eigh`` call (the free flyer at N = 64, 64 blocks of 19: 2.5 ms, and 4 ms
-to build the CasADi matrix of the result).
+largest entry of H (:data:`~ocgroupoid.nlp.rti.FLOOR`). The blocks are gathered from and
+scattered back to the nonzeros with index maps built once; blocks of equal size are
+decomposed in one batched ``numpy.linalg.eigh`` call (the free flyer at N = 64, 64 blocks of
+19: 2.5 ms, and 4 ms to build the CasADi matrix of the result). The exported C projects the
+same blocks with Jacobi rotations (``{prefix}mpc.c``: :mod:`ocgroupoid.export.mpc`).
 """
 
 from __future__ import annotations
@@ -31,10 +32,8 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
+from ..nlp.rti import FLOOR
 from ..nlp.stageform import NotStaged
-
-#: the smallest eigenvalue a projected block keeps, relative to the largest |H| entry
-FLOOR = 1e-8
 
 
 class StageProjection:

@@ -17,9 +17,10 @@ Its pieces, each a Function that Python evaluates and the export generates C of:
 * :attr:`RtiFunctions.update` — ``(z, dz, lam_a, lam_x) -> (x, lam_g, lam_x)``: the full
   step and the QP's multipliers, back in the NLP's variables and rows.
 
-Python's loop may project the Hessian's stage blocks between ``prepare`` and the QP
-(``hessian="projected"``, numpy: :mod:`ocgroupoid.mpc.convexify`); the exported C uses the
-exact Hessian.
+Between ``prepare`` and the QP the Hessian's stage blocks may be projected onto the positive
+definite matrices (``hessian="projected"``, :data:`FLOOR`): numpy's ``eigh`` in Python
+(:mod:`ocgroupoid.mpc.convexify`), Jacobi rotations in the exported C — an
+eigendecomposition has no CasADi operation to generate.
 """
 
 from __future__ import annotations
@@ -44,6 +45,9 @@ QP_SOLVERS = ("hpipm", "fatrop")
 HPIPM = {"mode": "robust", "iter_max": 30}
 #: the value CasADi's HPIPM interface puts for an infinite bound (:mod:`ocgroupoid.mpc.rti`)
 HPIPM_INF = 1e4
+#: the smallest eigenvalue a projected stage block keeps, relative to the largest |H| entry
+#: (:mod:`ocgroupoid.mpc.convexify`; the exported C's projection takes it too)
+FLOOR = 1e-8
 
 
 class RtiFunctions:
