@@ -103,7 +103,7 @@ class RealTimeIteration:
                               f"{', '.join(HESSIANS)}")
         self.tr, self.qp_name, self.hessian = tr, qp, hessian
         self.functions = fns = RtiFunctions(tr, qp)
-        self.embedding, self.form, self.solver = fns.embedding, fns.form, fns.solver
+        self.solver = fns.solver
         self.project = StageProjection(fns.hessian_sparsity, fns.stage_sizes)
         self._prepared: dict[str, Any] | None = None
 
