@@ -24,7 +24,7 @@ from ..nlp.program import Guess
 from ..nlp.shortcuts import choose
 from ..nlp.transcription import RawResult, Transcription
 from ..nlp.watch import Listener
-from . import mesh, richardson
+from . import mesh, parallel, richardson
 from .diagnostics import replay_of
 from .guesses import as_guess, geodesic_guesses, interpolate, model_guesses, perturbed_guesses
 from .interrupt import Interrupt, interruptible
@@ -179,6 +179,7 @@ class Solver:
         if any(n >= self.disc.N for n in levels):
             raise ConfigError(f"continuation grids must be coarser than N={self.disc.N}: {levels}")
         results: list[RawResult] = []
+        multi: dict[str, Any] = {}  # diagnostics["multistart"]
         given = guess
         prev: tuple[Transcription, RawResult] | None = None
         coarse = prev  # the grid solved before the last one (continuation)
@@ -196,23 +197,9 @@ class Solver:
                     starts = [as_guess(given, tr, p)]
                 else:
                     starts = self.guesses(tr, p, multistart)
-                level: list[RawResult] = []
-                budget: int | None = None  # iterations of a further start
-                for i, g in enumerate(starts):
-                    where = f"N={n}: start {i + 1}/{len(starts)} ({g.label})"
-                    progress(where)
-                    r = tr.solve(g, p, _listener(where, progress, interrupt, budget, deadline),
-                                 deadline, lambda: interrupt.requested)
-                    if r.status == "User_Requested_Stop" and time.monotonic() > deadline:
-                        r = replace(r, status=TIMED_OUT)
-                    level.append(r)
-                    self._spent += r.solve_seconds
-                    if interrupt.requested or time.monotonic() > deadline:
-                        break
-                    if i == 0 and level[0].success:
-                        budget = max(START_BUDGET[0], START_BUDGET[1] * level[0].iterations)
+                level, report = self._starts(tr, starts, p, progress, interrupt, deadline)
                 if prev is None:
-                    results = level
+                    results, multi = level, report
                 best = min(level, key=lambda r: (not r.success, r.cost))
                 if prev is not None and not interrupt.requested and \
                         _higher(best, prev[1], CONTINUATION_GAP):
@@ -241,6 +228,8 @@ class Solver:
                     filter(None, [why, solution.hint])))
                 solution.diagnostics["verdict"]["verified"] = False
                 solution.diagnostics["verdict"]["failures"].append(why)
+        if multi["starts"] > 1:
+            solution.diagnostics["multistart"] = multi
         if notes:
             solution.diagnostics["continuation"] = notes
             solution = replace(solution, hint="; ".join([*notes, *filter(None, [solution.hint])]))
@@ -251,6 +240,49 @@ class Solver:
                 best.cost, coarse[1].cost, tr.N, coarse[0].N, order, order)
         return replace(solution, starts=len(results),
                        ipopt_seconds_total=self._spent)
+
+    def _starts(self, tr: Transcription, starts: list[Guess], p: np.ndarray,
+                progress: Progress, interrupt: Interrupt, deadline: float
+                ) -> tuple[list[RawResult], dict[str, Any]]:
+        """The starts of one grid, in order: on worker processes
+        (:mod:`~ocgroupoid.solve.parallel`, ``options.workers``) or one after the other, the
+        starts after the first with :data:`START_BUDGET` iterations; the starts left are
+        skipped once Ctrl-C was pressed or the deadline passed. With what
+        ``diagnostics["multistart"]`` reports: the starts asked for and finished, the
+        workers, the wall time of them all, the sum of their solver times (the starts in
+        turn) and the best start's."""
+        t0 = time.perf_counter()
+        workers, why = parallel.plan(self.options.workers, len(starts))
+
+        def where(i: int) -> str:
+            return f"N={tr.N}: start {i + 1}/{len(starts)} ({starts[i].label})"
+
+        failed: list[dict[str, Any]] = []
+        if workers > 1:
+            level, failed = parallel.run(tr, starts, p, workers, where, progress, interrupt,
+                                         deadline, START_BUDGET, PROGRESS_EVERY)
+        else:
+            level = []
+            budget: int | None = None  # iterations of a further start
+            for i, g in enumerate(starts):
+                progress(where(i))
+                r = tr.solve(g, p, _listener(where(i), progress, interrupt, budget, deadline),
+                             deadline, lambda: interrupt.requested)
+                if r.status == "User_Requested_Stop" and time.monotonic() > deadline:
+                    r = replace(r, status=TIMED_OUT)
+                level.append(r)
+                if interrupt.requested or time.monotonic() > deadline:
+                    break
+                if i == 0 and level[0].success:
+                    budget = max(START_BUDGET[0], START_BUDGET[1] * level[0].iterations)
+        spent = sum(r.solve_seconds for r in level)
+        self._spent += spent
+        best = min(level, key=lambda r: (not r.success, r.cost))
+        report = {"starts": len(starts), "finished": len(level), "workers": workers,
+                  "wall_seconds": time.perf_counter() - t0, "sequential_seconds": spent,
+                  "best_start_seconds": best.solve_seconds}
+        return level, {**report, **({"note": why} if why else {}),
+                       **({"failed": failed} if failed else {})}
 
     def _bridge(self, prev: tuple[Transcription, RawResult], n: int, landed: RawResult,
                 params: dict[str, Any] | None, initial: dict[str, Any] | None,
