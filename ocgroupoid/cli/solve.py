@@ -80,6 +80,7 @@ def solve(
 def _solve_to_accuracy(problem: Any, f: Any, quiet: bool) -> Any:
     """``horizon.N: auto``: the grid search of :mod:`ocgroupoid.solve.auto`, one line per
     grid on stderr as it is done."""
+    from ..nlp.options import SolverOptions
     from ..solve import solve_to_accuracy
 
     d, s = f.discretization, f.solver
@@ -90,7 +91,8 @@ def _solve_to_accuracy(problem: Any, f: Any, quiet: bool) -> Any:
             progress=spinner.update if spinner is not None else silent,
             report=silent if quiet else lambda level: err.print(grid_line(level),
                                                                  highlight=False),
-            jit=s.jit, backend=s.backend, max_seconds=s.max_seconds)
+            jit=s.jit, backend=s.backend, max_seconds=s.max_seconds,
+            options=SolverOptions(workers=s.workers))
 
 
 def _solve_outputs(out_path: Optional[Path], plot_path: Optional[Path],

@@ -53,7 +53,7 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from ..nlp.backends import TIMED_OUT
+from ..nlp.backends import TIMED_OUT, IpoptBackend
 from ..nlp.program import Guess
 from ..nlp.transcription import RawResult, Transcription
 from .interrupt import Interrupt
@@ -174,6 +174,9 @@ def run(tr: Transcription, starts: Sequence[Guess], p: np.ndarray, workers: int,
     iterations; ``rule`` is the further starts' iteration budget, ``every`` the seconds
     between two progress messages of a start."""
     ctx = mp.get_context("fork")
+    for backend in tr.backends:  # IPOPT's instance with the iteration callback, built once
+        if isinstance(backend, IpoptBackend):  # here for every worker (else in each)
+            backend.watched_solver  # noqa: B018
     shared = _Shared(ctx.Event(), ctx.RawValue("q", _UNKNOWN), rule, every, os.getpid())
     conns: list[Connection] = []
     procs: list[Any] = []
