@@ -106,11 +106,12 @@ class _Shared:
     parent: int
 
 
-def _listener(conn: Connection, i: int, deadline: float, shared: _Shared
-              ) -> Callable[[int, float, float], bool]:
+def _listener(conn: Connection, i: int, deadline: float, shared: _Shared,
+              waited: list[float]) -> Callable[[int, float, float], bool]:
     """A worker's iteration callback: progress to the solving process at most every
     ``shared.every`` seconds; stop on the stop event, past the deadline, or at the budget of a
-    further start, waiting at the smallest budget until the first start has set it."""
+    further start, waiting at the smallest budget until the first start has set it (the
+    seconds waited added to ``waited[0]``: not the start's solver time)."""
     last = [time.perf_counter()]
 
     def stopped() -> bool:
@@ -126,10 +127,14 @@ def _listener(conn: Connection, i: int, deadline: float, shared: _Shared
             return True
         if i == 0 or iteration < shared.rule[0]:
             return False
-        while shared.budget.value == _UNKNOWN:  # the first start is still running
-            time.sleep(POLL / 10)
-            if stopped():
-                return True
+        t0 = time.perf_counter()
+        try:
+            while shared.budget.value == _UNKNOWN:  # the first start is still running
+                time.sleep(POLL / 10)
+                if stopped():
+                    return True
+        finally:
+            waited[0] += time.perf_counter() - t0
         budget = shared.budget.value
         return budget != _UNLIMITED and iteration >= budget
 
@@ -148,10 +153,11 @@ def _serve(conn: Connection, tr: Transcription, shared: _Shared) -> None:
         if task is None:
             return
         i, guess, p, deadline = task
+        waited = [0.0]
         try:
-            r = tr.solve(guess, p, _listener(conn, i, deadline, shared), deadline,
+            r = tr.solve(guess, p, _listener(conn, i, deadline, shared, waited), deadline,
                          shared.stop.is_set)
-            conn.send(("done", i, r))
+            conn.send(("done", i, replace(r, solve_seconds=r.solve_seconds - waited[0])))
         except Exception as err:  # noqa: BLE001  (reported as a failed start)
             conn.send(("error", i, f"{type(err).__name__}: {err}"))
 
@@ -169,10 +175,10 @@ def run(tr: Transcription, starts: Sequence[Guess], p: np.ndarray, workers: int,
         ) -> tuple[list[RawResult], list[dict[str, Any]]]:
     """Solve ``starts`` on ``workers`` forked processes (module docstring): the results of
     the starts that ran, in their order, and the starts that failed in a worker (number from
-    1, label, error). ``where(i)`` names start i for
-    ``progress``, which hears each start as it is handed out and finishes, and the workers'
-    iterations; ``rule`` is the further starts' iteration budget, ``every`` the seconds
-    between two progress messages of a start."""
+    1, label, error). ``where(i)`` names start i for ``progress``, which hears each start as
+    it is handed out and as it finishes, and the workers' iterations; ``rule`` is the
+    further starts' iteration budget, ``every`` the seconds between two progress messages
+    of a start."""
     ctx = mp.get_context("fork")
     for backend in tr.backends:  # IPOPT's instance with the iteration callback, built once
         if isinstance(backend, IpoptBackend):  # here for every worker (else in each)

@@ -148,7 +148,8 @@ class Solver:
         ``multistart``: True (every geodesic guess, the model's guesses and 3 perturbations;
         a further start gets :data:`START_BUDGET` iterations; the default of problem files
         and the CLI), False (the first geodesic only; the default of the options, which the
-        exported C solver shares) or the number of perturbed starts. ``continuation``:
+        exported C solver shares) or the number of perturbed starts; the starts run on
+        ``options.workers`` processes (:mod:`~ocgroupoid.solve.parallel`). ``continuation``:
         coarser N solved first, in order; the last of them gives the Solution a Richardson
         estimate of its cost error (:attr:`Solution.error_estimate`); both default to the
         solver options'. ``replay``: drive the controls
@@ -244,13 +245,11 @@ class Solver:
     def _starts(self, tr: Transcription, starts: list[Guess], p: np.ndarray,
                 progress: Progress, interrupt: Interrupt, deadline: float
                 ) -> tuple[list[RawResult], dict[str, Any]]:
-        """The starts of one grid, in order: on worker processes
-        (:mod:`~ocgroupoid.solve.parallel`, ``options.workers``) or one after the other, the
-        starts after the first with :data:`START_BUDGET` iterations; the starts left are
-        skipped once Ctrl-C was pressed or the deadline passed. With what
-        ``diagnostics["multistart"]`` reports: the starts asked for and finished, the
-        workers, the wall time of them all, the sum of their solver times (the starts in
-        turn) and the best start's."""
+        """The starts of one grid, in order, on worker processes (``options.workers``,
+        :mod:`~ocgroupoid.solve.parallel`) or in turn, each after the first with
+        :data:`START_BUDGET` iterations; none started after Ctrl-C or the deadline. With
+        ``diagnostics["multistart"]``: the starts asked for and finished, the workers, the
+        wall time of all, the sum of their solver times, and the best start's."""
         t0 = time.perf_counter()
         workers, why = parallel.plan(self.options.workers, len(starts))
 
