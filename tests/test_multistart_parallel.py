@@ -37,6 +37,7 @@ def test_parallel_gives_the_sequential_result(factory, N: int, starts: int) -> N
     assert report["starts"] == report["finished"] == two.starts
     assert report["sequential_seconds"] == pytest.approx(two.ipopt_seconds_total)
     assert 0 < report["best_start_seconds"] <= report["sequential_seconds"]
+    assert not __import__("multiprocessing").active_children()  # the workers ended
 
 
 @pytest.mark.parametrize("workers", [0, -1, 1.5, True, "2"])
@@ -105,3 +106,24 @@ def test_a_further_start_waits_for_the_first_starts_budget() -> None:
     assert not further(1000, 1.0, 0.0)
     shared.stop.set()
     assert first(1, 1.0, 0.0) and further(1, 1.0, 0.0)
+
+
+def test_ctrl_c_stops_the_workers_with_the_best_point_so_far() -> None:
+    """SIGINT to the solving process: the workers stop at their next iteration and end,
+    the starts not handed out are skipped, status interrupted."""
+    import multiprocessing
+    import signal
+    import threading
+
+    solver = og.compile(heavy_top(), N=128, workers=2)
+    before = signal.getsignal(signal.SIGINT)
+    timer = threading.Timer(0.5, lambda: os.kill(os.getpid(), signal.SIGINT))
+    timer.start()
+    try:
+        sol = solver.solve(multistart=12)
+    finally:
+        timer.cancel()
+    assert sol.status == "interrupted" and not sol.success
+    assert sol.starts < sol.diagnostics["multistart"]["starts"]
+    assert not multiprocessing.active_children()  # the workers are gone
+    assert signal.getsignal(signal.SIGINT) is before
