@@ -127,3 +127,28 @@ def test_ctrl_c_stops_the_workers_with_the_best_point_so_far() -> None:
     assert sol.starts < sol.diagnostics["multistart"]["starts"]
     assert not multiprocessing.active_children()  # the workers are gone
     assert signal.getsignal(signal.SIGINT) is before
+
+
+def test_problem_files_and_the_cli_set_the_workers(tmp_path) -> None:
+    """``solver.workers`` of a problem file reaches the options (checked as they are); the
+    summary of ``ocgroupoid solve`` shows the multi-start's workers and times."""
+    from pathlib import Path
+
+    from typer.testing import CliRunner
+
+    from ocgroupoid.cli import app
+    from ocgroupoid.files.load import load
+    from ocgroupoid.files.solving import options
+
+    so3 = Path(__file__).resolve().parent.parent / "problems" / "so3_rest_to_rest.yaml"
+    assert options(load(so3, ["solver.workers=1"])).workers == 1
+    assert options(load(so3)).workers is None
+    with pytest.raises(ConfigError, match="workers"):
+        load(so3, ["solver.workers=0"])
+    out = tmp_path / "sol.json"
+    r = CliRunner().invoke(app, ["solve", str(so3), "--set", "horizon.N=16",
+                                 "--set", "solver.workers=2", "--out", str(out)])
+    assert r.exit_code == 0, r.output
+    assert "multi-start" in r.output  # the summary's row (its text wraps with the terminal)
+    report = og.Solution.from_json(out).diagnostics["multistart"]
+    assert report["workers"] == 2 and report["finished"] == report["starts"] > 1
