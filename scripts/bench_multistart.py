@@ -39,7 +39,7 @@ def case(name: str, perturbed: int, repeats: int, N: int | None, step) -> dict:
     """One problem file and number of perturbed starts: in turn and on WORKERS processes."""
     overrides = [f"horizon.N={N}"] if N else []
     problem, method, options = build_all(load(ROOT / "problems" / f"{name}.yaml", overrides))
-    solvers = {w: og.compile(problem, method, options, workers=w) for w in (1, WORKERS)}
+    solvers = {w: og.compile_problem(problem, method, options, workers=w) for w in (1, WORKERS)}
     runs: dict[int, list[dict]] = {1: [], WORKERS: []}
     sols = {}
     for r in range(repeats):

@@ -9,10 +9,10 @@ import pytest
 
 import ocgroupoid as og
 from ocgroupoid.errors import ConfigError
-from ocgroupoid.models.heavy_top import heavy_top
-from ocgroupoid.models.rigid_body import rigid_body
 from ocgroupoid.nlp.transcription import Transcription
 from ocgroupoid.solve import parallel
+from ocgroupoid.systems.heavy_top import heavy_top
+from ocgroupoid.systems.rigid_body import rigid_body
 
 pytestmark = pytest.mark.skipif("fork" not in __import__("multiprocessing")
                                 .get_all_start_methods(), reason="workers are forked")
@@ -22,8 +22,8 @@ pytestmark = pytest.mark.skipif("fork" not in __import__("multiprocessing")
 def test_parallel_gives_the_sequential_result(factory, N: int, starts: int) -> None:
     """Same best start and cost, same distinct minima, same verdict, starts in order."""
     problem = factory()
-    one = og.compile(problem, N=N, workers=1).solve(multistart=starts)
-    two = og.compile(problem, N=N, workers=2).solve(multistart=starts)
+    one = og.compile_problem(problem, N=N, workers=1).solve(multistart=starts)
+    two = og.compile_problem(problem, N=N, workers=2).solve(multistart=starts)
     assert one.diagnostics["multistart"]["workers"] == 1
     assert two.diagnostics["multistart"]["workers"] == 2
     assert two.success == one.success and two.status == one.status
@@ -45,7 +45,7 @@ def test_workers_are_checked(workers) -> None:
     with pytest.raises(ConfigError, match="workers is the number of processes"):
         og.SolverOptions(workers=workers)
     with pytest.raises(ConfigError, match="an integer >= 1"):
-        og.compile(rigid_body(), N=8, workers=workers)
+        og.compile_problem(rigid_body(), N=8, workers=workers)
 
 
 def test_plan() -> None:
@@ -70,7 +70,7 @@ def test_a_start_that_fails_in_its_worker_is_reported(monkeypatch) -> None:
 
     monkeypatch.setattr(Transcription, "solve", faulty)  # the forked workers inherit it
     progress: list[str] = []
-    sol = og.compile(rigid_body(), N=16, workers=2).solve(multistart=3,
+    sol = og.compile_problem(rigid_body(), N=16, workers=2).solve(multistart=3,
                                                          progress=progress.append)
     failed = {f["label"]: f["error"] for f in sol.diagnostics["multistart"]["failed"]}
     assert failed["perturbed 1"] == "RuntimeError: broken start"
@@ -115,7 +115,7 @@ def test_ctrl_c_stops_the_workers_with_the_best_point_so_far() -> None:
     import signal
     import threading
 
-    solver = og.compile(heavy_top(), N=128, workers=2)
+    solver = og.compile_problem(heavy_top(), N=128, workers=2)
     before = signal.getsignal(signal.SIGINT)
     timer = threading.Timer(0.5, lambda: os.kill(os.getpid(), signal.SIGINT))
     timer.start()

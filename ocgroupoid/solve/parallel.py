@@ -18,7 +18,7 @@ start (its guess and the parameters) goes to a worker and only its
 
 **The same result as one start after the other.** Starts are handed out in their order and
 reported in it, whatever order they finish in. The iteration budget of a further start
-(``START_BUDGET`` of :mod:`~ocgroupoid.solve.solver`, a multiple of the first start's
+(``START_BUDGET`` of :mod:`~ocgroupoid.solve.compiled`, a multiple of the first start's
 iterations) is kept exactly: a further start that reaches the smallest budget before the first
 start has finished waits for it, then goes on or stops at the same iteration as it would have
 in turn. So every start runs the same iterations from the same point, and the best start,
