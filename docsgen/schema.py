@@ -4,7 +4,7 @@ Every key the schema accepts becomes one row (key, type, default, range, descrip
 top level and its sections (:class:`~ocgroupoid.files.schema.ProblemFile`), the ``definition``
 of a custom model (:class:`~ocgroupoid.files.custom.Definition`) and the ``parameters``,
 ``initial`` and ``final`` sections of every built-in model
-(:data:`~ocgroupoid.models.MODELS`). Nested keys are dotted (``horizon.N``); an item of a list
+(:data:`~ocgroupoid.systems.MODELS`). Nested keys are dotted (``horizon.N``); an item of a list
 of sections is ``[]`` (``definition.groupoid[].type``) and an entry of a mapping of sections
 ``<name>`` (``definition.describe.<name>.unit``). A key without a description is an error:
 the reference documents every key or the build fails.
@@ -27,7 +27,7 @@ from pydantic_core import PydanticUndefined
 from ocgroupoid.files.custom import Definition
 from ocgroupoid.files.schema import ProblemFile
 from ocgroupoid.model.values import check_vector
-from ocgroupoid.models import MODELS
+from ocgroupoid.systems import MODELS
 
 #: the scalar types by the name a problem file's author knows them
 NAMES = {str: "text", int: "integer", float: "number", bool: "boolean", Any: "value",

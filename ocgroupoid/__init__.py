@@ -3,7 +3,7 @@
 State the continuous problem with :class:`Problem` on a product of groupoid factors
 (:class:`LieGroupFactor`, :class:`Pair`, :class:`SphereAction`), choose how to discretise it
 (:class:`Method`: N intervals, a scheme, a retraction) and how to solve it
-(:class:`SolverOptions`: IPOPT or fatrop, their options), then ``compile`` it once and
+(:class:`SolverOptions`: IPOPT or fatrop, their options), then ``compile_problem`` it once and
 ``solve`` it (``og.solve(problem, og.Method(N=64), og.SolverOptions())``, or by keyword,
 ``og.solve(problem, N=64)``).
 
@@ -35,14 +35,14 @@ from .model import GuessContext, Problem
 from .mpc import MpcResult, mpc
 from .nlp import Discretization, Guess, Method, SolverOptions, Transcription
 from .plotting import plot, view  # registers Solution.plot; matplotlib loads on use
-from .solve import Solution, Solver, compile, solve, solve_to_accuracy
-from .solve.simulate import Simulation, simulate
+from .simulation.simulate import Simulation, simulate
+from .solve import CompiledProblem, Solution, compile_problem, solve, solve_to_accuracy
 from .sweep import sweep  # Dask, pandas and pyarrow are imported when a sweep runs
 
 __all__ = [
     "lie", "so3", "Problem", "GuessContext", "Groupoid", "LieGroupFactor", "Pair",
     "SphereAction", "Method", "SolverOptions", "Discretization", "Transcription", "Guess",
-    "Solver", "compile", "solve",
+    "CompiledProblem", "compile_problem", "solve",
     "solve_to_accuracy",
     "Solution", "OcgError", "ConfigError", "DimensionError", "SingularityError",
     "BoundaryError", "TranscriptionError", "SolverError", "export_c", "sweep", "__version__",

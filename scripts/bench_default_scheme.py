@@ -3,7 +3,7 @@
 For every problem file that does not name its scheme, both schemes solve it at the file's N
 and order2 also at 2N and 4N (one start each, the file's other settings). Printed per run:
 the replay's landing error relative to the distance the plan covers (the quantity
-"verified" bounds, ``solve/verdict.py``), the solver time of the start, and whether the
+"verified" bounds, ``verify/verdict.py``), the solver time of the start, and whether the
 solution is verified. Writes ``OUT/bench_default_scheme.json`` and a chart of landing error
 against solver time, ``OUT/bench_default_scheme.png`` (``--out``, default ``results/``);
 ``--quick``: the canonical slew at N = 16.
@@ -22,7 +22,7 @@ from ocgroupoid import files
 from ocgroupoid.bench.chart import save_png
 from ocgroupoid.bench.record import write_summary
 from ocgroupoid.bench.script import arguments
-from ocgroupoid.solve import compile as compile_problem
+from ocgroupoid.solve import compile_problem as compile_problem
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "results"

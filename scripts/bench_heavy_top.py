@@ -24,15 +24,15 @@ from ocgroupoid.bench.record import write_summary  # noqa: E402
 from ocgroupoid.bench.reference import extrapolated  # noqa: E402
 from ocgroupoid.bench.script import arguments, rounded, steps  # noqa: E402
 from ocgroupoid.bench.timing import median_seconds  # noqa: E402
-from ocgroupoid.models.heavy_top import discrete_casimir, heavy_top  # noqa: E402
 from ocgroupoid.solve import interpolate  # noqa: E402
-from ocgroupoid.solve.richardson import observed_orders  # noqa: E402
+from ocgroupoid.systems.heavy_top import discrete_casimir, heavy_top  # noqa: E402
+from ocgroupoid.verify.richardson import observed_orders  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent.parent / "results"
 RULES = ("midpoint", "lie_poisson")
 
 
-def row(solver: og.Solver, sol: og.Solution, seconds: float, repeats: int) -> dict:
+def row(solver: og.CompiledProblem, sol: og.Solution, seconds: float, repeats: int) -> dict:
     """Figures of one solve; the IPOPT time is the median of re-solves from the same start."""
     tr = solver.transcription
     best = sol.discretization.get("start")  # the label of the start that won
@@ -69,7 +69,7 @@ def main() -> None:
             for N in [*Ns, *fine]:
                 step(f"{rule} N={N}")
                 t0 = time.perf_counter()
-                solver = og.compile(pb, N=N, rule=rule)
+                solver = og.compile_problem(pb, N=N, rule=rule)
                 if N in Ns:
                     sol = solver.solve(multistart=True)
                 else:

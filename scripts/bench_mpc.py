@@ -94,7 +94,7 @@ def rockit_loop(problem: og.Problem, name: str, N: int, steps: int, key: str
     (``"examples"``); the seconds of each step and the failed steps."""
     from rockit import MultipleShooting, Ocp
 
-    tr = og.compile(problem, N).transcription
+    tr = og.compile_problem(problem, N).transcription
     p = tr.pack()
     T = tr.horizon_of(p)
     P = {k: ca.DM(tr.part(p, "P")[s]) for k, s in problem.parameter_slices.items()}

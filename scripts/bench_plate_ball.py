@@ -23,18 +23,18 @@ import ocgroupoid as og  # noqa: E402
 from ocgroupoid.bench.record import write_summary  # noqa: E402
 from ocgroupoid.bench.reference import extrapolated  # noqa: E402
 from ocgroupoid.bench.script import arguments, rounded, steps  # noqa: E402
-from ocgroupoid.models.plate_ball import plate_ball  # noqa: E402
 from ocgroupoid.nlp import RawResult  # noqa: E402
 from ocgroupoid.solve import distinct_minima, make_solution  # noqa: E402
-from ocgroupoid.solve.richardson import observed_orders  # noqa: E402
+from ocgroupoid.systems.plate_ball import plate_ball  # noqa: E402
+from ocgroupoid.verify.richardson import observed_orders  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent.parent / "results"
 OMEGAS = (0.0, 1.0)
 
 
 def run(pb: og.Problem, N: int, rule: str) -> tuple[og.Solution, list[RawResult], float]:
-    """Multi-start as ``Solver.solve(multistart=True)`` does, keeping every start's result."""
-    solver = og.compile(pb, N=N, retraction=rule)
+    """Multi-start as ``CompiledProblem.solve(multistart=True)`` does, keeping every start's result."""
+    solver = og.compile_problem(pb, N=N, retraction=rule)
     tr = solver.transcription
     p = tr.pack()
     t0 = time.perf_counter()
@@ -77,7 +77,7 @@ def main() -> None:
                     sol, results, seconds = run(pb, N, rule)
                     rows.append(row(sol, results, seconds))
                     if Om == 0.0 and rule == "cayley" and N == Ns[-1]:
-                        tr = og.compile(pb, N=N).transcription
+                        tr = og.compile_problem(pb, N=N).transcription
                         pair = [tr.unpack(r.x, r.p)["s"][:, :2] for m in sol.minima[:2]
                                 for r in results if r.label == m["label"]]
                 costs = [r["cost"] for r in rows]

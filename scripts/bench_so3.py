@@ -30,11 +30,11 @@ import ocgroupoid as og  # noqa: E402
 from ocgroupoid.bench.record import write_summary  # noqa: E402
 from ocgroupoid.bench.script import arguments, steps  # noqa: E402
 from ocgroupoid.bench.timing import median_seconds  # noqa: E402
-from ocgroupoid.models.rigid_body import rigid_body  # noqa: E402
 from ocgroupoid.nlp.assembly import StageDerivatives, plain_nlp  # noqa: E402
 from ocgroupoid.nlp.backends.ipopt import nlpsol_options  # noqa: E402
 from ocgroupoid.nlp.transcription import Transcription  # noqa: E402
 from ocgroupoid.solve import geodesic_guesses  # noqa: E402
+from ocgroupoid.systems.rigid_body import rigid_body  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent.parent / "results"
 
@@ -137,7 +137,7 @@ def main() -> None:
     with steps(len(Ns) * (2 + len(BASELINES))) as step:
         for N in Ns:
             step(f"N={N}: build")
-            builds = [og.compile(pb, N=N).transcription for _ in range(1 if args.quick else 3)]
+            builds = [og.compile_problem(pb, N=N).transcription for _ in range(1 if args.quick else 3)]
             build = statistics.median(b.build_seconds for b in builds)
             phases = {k: statistics.median(b.build_phases[k] for b in builds)
                       for k in builds[0].build_phases}

@@ -27,8 +27,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import ocgroupoid as og  # noqa: E402
 from ocgroupoid.bench.record import write_summary  # noqa: E402
 from ocgroupoid.bench.script import arguments  # noqa: E402
-from ocgroupoid.models.heavy_top import GAMMA0, heavy_top  # noqa: E402
-from ocgroupoid.models.rigid_body import INERTIA, rigid_body  # noqa: E402
+from ocgroupoid.systems.heavy_top import GAMMA0, heavy_top  # noqa: E402
+from ocgroupoid.systems.rigid_body import INERTIA, rigid_body  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent.parent / "results"
 H, STEPS, QUICK_STEPS = 0.1, 100_000, 10_000

@@ -26,7 +26,7 @@ def solve_file(path: Path, quick: bool) -> og.Solution:
     """A problem file solved with its own settings (N = QUICK_N when ``quick``)."""
     cfg = files.load(path, [f"horizon.N={QUICK_N}"] if quick else [])
     f, d = cfg.file, cfg.file.discretization
-    solver = og.compile(files.build(cfg), f.horizon.N, d.retraction, d.rule, f.solver.ipopt,
+    solver = og.compile_problem(files.build(cfg), f.horizon.N, d.retraction, d.rule, f.solver.ipopt,
                         d.scheme, d.steps)
     return solver.solve(multistart=f.solver.multistart,
                         continuation=f.solver.continuation or None)

@@ -1,4 +1,4 @@
-"""The API is general: a problem shipped nowhere in models/, stated in a few lines."""
+"""The API is general: a problem shipped nowhere in systems/, stated in a few lines."""
 
 from __future__ import annotations
 

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 import ocgroupoid as og
-from ocgroupoid.models.heavy_top import heavy_top
-from ocgroupoid.models.plate_ball import plate_ball
-from ocgroupoid.models.rigid_body import rigid_body
+from ocgroupoid.systems.heavy_top import heavy_top
+from ocgroupoid.systems.plate_ball import plate_ball
+from ocgroupoid.systems.rigid_body import rigid_body
 
 from .test_api_general import minimum_acceleration
 from .test_transcription import free_end_velocity, rolling
@@ -32,7 +32,7 @@ def reference(tr) -> ca.Function:
 @pytest.mark.parametrize("scheme", og.nlp.SCHEME_NAMES)
 def test_scattered_derivatives_equal_automatic_differentiation(factory, N: int,
                                                                scheme: str) -> None:
-    tr = og.compile(factory(), N=N, scheme=scheme).transcription
+    tr = og.compile_problem(factory(), N=N, scheme=scheme).transcription
     p = tr.pack()
     rng = np.random.default_rng(N)
     x = rng.normal(size=tr.nx) * 0.3

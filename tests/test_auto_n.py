@@ -17,10 +17,10 @@ from typer.testing import CliRunner
 import ocgroupoid as og
 from ocgroupoid import files
 from ocgroupoid.cli import app
-from ocgroupoid.models.rigid_body import rigid_body
-from ocgroupoid.solve import Solution, Solver
+from ocgroupoid.solve import CompiledProblem, Solution
 from ocgroupoid.solve.guesses import interpolate
-from ocgroupoid.solve.richardson import relative, richardson_error
+from ocgroupoid.systems.rigid_body import rigid_body
+from ocgroupoid.verify.richardson import relative, richardson_error
 
 ROOT = Path(__file__).resolve().parent.parent
 PROBLEMS = ROOT / "problems"
@@ -70,11 +70,11 @@ def reference(name: str, overrides: list[str], sol: Solution, N: int, accuracy: 
     cfg = files.load(PROBLEMS / f"{name}.yaml", overrides)
     pb, f = files.build(cfg), cfg.file
     d = f.discretization
-    chosen = Solver(pb, sol.N, d.retraction, d.rule, f.solver.ipopt,
+    chosen = CompiledProblem(pb, sol.N, d.retraction, d.rule, f.solver.ipopt,
                     sol.discretization["scheme"])
     costs = []
     for n in (N // 2, N):
-        fine = Solver(pb, n, d.retraction, d.rule, f.solver.ipopt, "order4")
+        fine = CompiledProblem(pb, n, d.retraction, d.rule, f.solver.ipopt, "order4")
         ref = fine.solve(guess=interpolate(chosen.transcription, sol.x, sol.p, n))
         assert ref.success, ref.hint
         costs.append(ref.cost)

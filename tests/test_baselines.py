@@ -15,9 +15,9 @@ import ocgroupoid as og
 from ocgroupoid import files
 from ocgroupoid.errors import ConfigError
 from ocgroupoid.lie import so3
-from ocgroupoid.models.rigid_body import rigid_body
 from ocgroupoid.nlp.schemes import BASELINES, SCHEMES
 from ocgroupoid.nlp.schemes.coordinates import coordinates, quaternion_of_matrix
+from ocgroupoid.systems.rigid_body import rigid_body
 
 ROOT = Path(__file__).resolve().parents[1]
 SO3 = ROOT / "problems" / "so3_rest_to_rest.yaml"
@@ -46,7 +46,7 @@ def test_the_quaternion_baseline_is_fourth_order_and_drifts_off_the_group() -> N
     """Replay errors fall by ~16 per halving of h; |q| - 1 is never enforced."""
     errs, drift = [], []
     for N in (8, 16, 32):
-        sol = og.compile(rigid_body(), N=N, scheme="rk4_quat").solve(multistart=False)
+        sol = og.compile_problem(rigid_body(), N=N, scheme="rk4_quat").solve(multistart=False)
         errs.append(sol.diagnostics["replay"]["terminal_error"]["R"])
         drift.append(sol.diagnostics["manifold_distance"]["R"])
     orders = np.log2(np.array(errs[:-1]) / np.array(errs[1:]))
@@ -68,7 +68,7 @@ def test_euler_angles_fail_through_gimbal_lock_where_ours_do_not() -> None:
     (or misses by orders of magnitude more) and says why; order2 and order4 with Cayley,
     and the quaternion baseline, solve it."""
     RT = so3.from_rotvec(np.array([0.0, 2.0, 0.0]))
-    sols = {s: og.compile(rigid_body(RT=RT), N=16, scheme=s).solve(multistart=False)
+    sols = {s: og.compile_problem(rigid_body(RT=RT), N=16, scheme=s).solve(multistart=False)
             for s in ("order2", "order4", "rk4_quat", "rk4_euler")}
     for s in ("order2", "order4", "rk4_quat"):
         assert sols[s].success, (s, sols[s].hint)
@@ -95,7 +95,7 @@ def test_a_problem_without_continuous_dynamics_has_no_baseline() -> None:
     pb.initial(R=np.eye(3), Omega=[0, 0, 0])
     pb.final(R=so3.from_rotvec(np.array([0.3, 0.0, 0.0])), Omega=[0, 0, 0])
     with pytest.raises(ConfigError, match="rk4_quat integrates the continuous dynamics"):
-        og.compile(pb, N=8, scheme="rk4_quat")
+        og.compile_problem(pb, N=8, scheme="rk4_quat")
 
 
 # ------------------------------------------------------------------ coordinates

@@ -19,7 +19,7 @@ from ocgroupoid.bench.record import read_rows
 from ocgroupoid.bench.stability import manoeuvre
 from ocgroupoid.bench.timing import median_seconds
 from ocgroupoid.cli import app
-from ocgroupoid.solve.richardson import observed_orders
+from ocgroupoid.verify.richardson import observed_orders
 
 ROOT = Path(__file__).resolve().parent.parent
 SO3 = ROOT / "problems" / "so3_rest_to_rest.yaml"

@@ -13,8 +13,8 @@ import ocgroupoid as og
 from ocgroupoid import files
 from ocgroupoid.cli import app
 from ocgroupoid.errors import ConfigError
-from ocgroupoid.models.plate_ball import plate_ball
-from ocgroupoid.models.rigid_body import rigid_body
+from ocgroupoid.systems.plate_ball import plate_ball
+from ocgroupoid.systems.rigid_body import rigid_body
 
 ROOT = Path(__file__).resolve().parent.parent
 THETA, A = 2.0, 0.5  # a rotation about e3 by THETA with |du3/dt| <= A: T* = 2 sqrt(THETA/A)
@@ -96,7 +96,7 @@ def test_adaptive_steps_put_a_node_on_the_switch(N: int) -> None:
 
 def test_adaptive_steps_need_interval_stages() -> None:
     with pytest.raises(ConfigError, match="adaptive steps.*order4"):
-        og.compile(minimum_time(), N=8, scheme="order2", steps="adaptive")
+        og.compile_problem(minimum_time(), N=8, scheme="order2", steps="adaptive")
 
 
 # ------------------------------------------------------------------ bounded slew
@@ -134,7 +134,7 @@ def test_parameter_bounds_change_without_rebuilding(monkeypatch) -> None:
     pb = rigid_body()
     umax = pb.parameter("umax", 1, 0.3)
     pb.bound(controls(pb), -umax, umax, name="u")
-    solver = og.compile(pb, N=24)
+    solver = og.compile_problem(pb, N=24)
     first = solver.solve()
     monkeypatch.setattr(ca, "nlpsol", lambda *a, **k: (_ for _ in ()).throw(AssertionError))
     tighter = solver.solve(params={"umax": 0.29})  # 0.25 is infeasible in T = 5
@@ -247,7 +247,7 @@ def test_a_parameter_bound_in_a_file_follows_the_parameter(tmp_path) -> None:
     lows = []
     for inertia in (1.0, 0.5):
         cfg = files.load(path, [f"parameters.inertia=[{inertia}, 2.0, 3.0]"])
-        tr = og.compile(files.build(cfg), N=8).transcription
+        tr = og.compile_problem(files.build(cfg), N=8).transcription
         lows.append(float(np.min(np.array(tr.bounds_function(tr.pack())[0]))))
     assert lows == pytest.approx([-0.3, -0.2])
 

@@ -13,7 +13,7 @@ from typer.testing import CliRunner
 
 import ocgroupoid as og
 from ocgroupoid.cli import app
-from ocgroupoid.models.rigid_body import rigid_body
+from ocgroupoid.systems.rigid_body import rigid_body
 
 ROOT = Path(__file__).resolve().parent.parent
 SO3 = ROOT / "problems" / "so3_rest_to_rest.yaml"
@@ -174,8 +174,8 @@ def test_top_level_help_lists_every_command() -> None:
 
 
 def test_list_names_the_models_schemes_and_problem_files(monkeypatch) -> None:
-    from ocgroupoid.models import MODELS
     from ocgroupoid.nlp.schemes import SCHEME_NAMES
+    from ocgroupoid.systems import MODELS
 
     monkeypatch.chdir(ROOT)
     r = runner.invoke(app, ["list"], terminal_width=200)

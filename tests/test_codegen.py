@@ -203,7 +203,7 @@ def test_packing_inverts_the_values_of_p(case: Case, tmp_path: Path) -> None:
     file (the values) describes an instance completely."""
     cfg = load_case(case, tmp_path)
     f = cfg.file
-    tr = og.compile(files.build(cfg), N_TEST, f.discretization.retraction,
+    tr = og.compile_problem(files.build(cfg), N_TEST, f.discretization.retraction,
                     f.discretization.rule, f.solver.ipopt).transcription
     for p in (tr.pack(), tr.pack(*second_instance(tr))):
         packed, bad = (np.array(v).ravel() for v in tr.values.pack_function(
@@ -214,7 +214,7 @@ def test_packing_inverts_the_values_of_p(case: Case, tmp_path: Path) -> None:
 
 def test_pack_flags_values_outside_their_domain() -> None:
     """A zero quaternion, T <= 0: flagged per key, not silently packed."""
-    tr = og.compile(_rigid_body(), N=4).transcription
+    tr = og.compile_problem(_rigid_body(), N=4).transcription
     values = tr.values.values_of(tr.pack())
     keys = [b.key for b in tr.values.blocks]
     for key, value in (("initial.R", 0.0), ("T", -1.0)):
@@ -227,7 +227,7 @@ def test_pack_flags_values_outside_their_domain() -> None:
 
 
 def _rigid_body() -> og.Problem:
-    from ocgroupoid.models.rigid_body import rigid_body
+    from ocgroupoid.systems.rigid_body import rigid_body
     return rigid_body()
 
 
@@ -453,7 +453,7 @@ def test_failed_solve_prints_the_json_and_exits_1(tmp_path: Path) -> None:
 
 
 def test_export_names_the_problem_with_the_bad_input(tmp_path: Path) -> None:
-    with pytest.raises(ConfigError, match="Problem or a compiled Solver"):
+    with pytest.raises(ConfigError, match="Problem or a compiled CompiledProblem"):
         export_c("so3_rest_to_rest", tmp_path)  # type: ignore[arg-type]
     with pytest.raises(ExportError, match="no libipopt in"):
         export_c(_rigid_body(), tmp_path, N=4, ipopt_lib=tmp_path)

@@ -11,8 +11,8 @@ from typer.testing import CliRunner
 import ocgroupoid as og
 from ocgroupoid import files
 from ocgroupoid.cli import app
-from ocgroupoid.models.rigid_body import rigid_body
 from ocgroupoid.solve.solution import write_atomic
+from ocgroupoid.systems.rigid_body import rigid_body
 
 ROOT = Path(__file__).resolve().parent.parent
 runner = CliRunner()

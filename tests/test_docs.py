@@ -38,7 +38,7 @@ from ocgroupoid import files
 from ocgroupoid.files.custom import Definition
 from ocgroupoid.files.schema import ProblemFile
 from ocgroupoid.model.values import Strict
-from ocgroupoid.models import MODELS
+from ocgroupoid.systems import MODELS
 
 ROOT = Path(__file__).resolve().parent.parent
 PAGES = sorted((ROOT / "docs").rglob("*.md")) + [ROOT / "README.md"]

@@ -16,8 +16,8 @@ import pytest
 import ocgroupoid as og
 from ocgroupoid.export.codegen import EXPORT_IPOPT, export_c, positive_parameters
 from ocgroupoid.model.ranges import FILE_BYTES, block_range
-from ocgroupoid.models import MODELS
-from ocgroupoid.models.rigid_body import rigid_body
+from ocgroupoid.systems import MODELS
+from ocgroupoid.systems.rigid_body import rigid_body
 
 from .cbuild import CFLAGS
 
@@ -36,7 +36,7 @@ pytestmark = pytest.mark.skipif(shutil.which("cc") is None or shutil.which("make
 def driver(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, og.Transcription]:
     """The rigid-body slew exported (N = 16: verified) and built with -Werror."""
     root = tmp_path_factory.mktemp("driver")
-    exp = export_c(og.compile(rigid_body(), N=16, ipopt=EXPORT_IPOPT), root / "c", build=True,
+    exp = export_c(og.compile_problem(rigid_body(), N=16, ipopt=EXPORT_IPOPT), root / "c", build=True,
                    cflags=CFLAGS,
                    positive=positive_parameters(MODELS["rigid_body"].parameters))
     assert exp.binary is not None

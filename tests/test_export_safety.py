@@ -27,8 +27,8 @@ from ocgroupoid.export.codegen import (
     positive_parameters,
 )
 from ocgroupoid.files import source
-from ocgroupoid.models import MODELS
-from ocgroupoid.models.rigid_body import rigid_body
+from ocgroupoid.systems import MODELS
+from ocgroupoid.systems.rigid_body import rigid_body
 
 ROOT = Path(__file__).resolve().parent.parent
 SO3 = ROOT / "problems" / "so3_rest_to_rest.yaml"
@@ -48,10 +48,10 @@ def one_line(text: str) -> str:
     return " ".join(text.split())
 
 
-def so3_solver(N: int = 4, name: str | None = None) -> og.Solver:
+def so3_solver(N: int = 4, name: str | None = None) -> og.CompiledProblem:
     """The rigid-body slew compiled for export; ``name`` is set afterwards (the compiled
     Functions keep their own safe names: only the export sees it)."""
-    solver = og.compile(rigid_body(), N=N, ipopt=EXPORT_IPOPT)
+    solver = og.compile_problem(rigid_body(), N=N, ipopt=EXPORT_IPOPT)
     if name is not None:
         solver.transcription.problem.name = name
     return solver
@@ -163,7 +163,7 @@ def test_export_c_checks_its_folder_before_compiling(tmp_path: Path, monkeypatch
     def no_compile(*args, **kwargs):
         raise AssertionError("compiled before the folder was checked")
 
-    monkeypatch.setattr(codegen.Solver, "__init__", no_compile)
+    monkeypatch.setattr(codegen.CompiledProblem, "__init__", no_compile)
     with pytest.raises(ExportError, match="not written by export-c"):
         export_c(rigid_body(), out, N=4)
 

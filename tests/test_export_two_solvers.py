@@ -17,7 +17,7 @@ import pytest
 from ocgroupoid import files
 from ocgroupoid.errors import ConfigError
 from ocgroupoid.export.codegen import BACKEND_LIBS, casadi_dir, export_c, make
-from ocgroupoid.models.rigid_body import rigid_body
+from ocgroupoid.systems.rigid_body import rigid_body
 
 from .cbuild import CFLAGS
 

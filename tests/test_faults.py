@@ -31,12 +31,12 @@ runner = CliRunner()
 #: the command line, telling on stderr when the first start begins (then SIGTERM is sent)
 TELL_AND_RUN = """\
 import sys
-from ocgroupoid.solve import solver
-guesses = solver.Solver.guesses
+from ocgroupoid.solve import compiled
+guesses = compiled.CompiledProblem.guesses
 def told(*args, **kwargs):
     print("solving", file=sys.stderr, flush=True)
     return guesses(*args, **kwargs)
-solver.Solver.guesses = told
+compiled.CompiledProblem.guesses = told
 from ocgroupoid.cli import main
 sys.argv = ["ocgroupoid", *sys.argv[1:]]
 main()
@@ -86,14 +86,14 @@ def test_the_first_order_plate_ball_on_fatrop_returns(tmp_path: Path) -> None:
     assert "NaN detected" not in r.stderr and seconds < 30
 
 
-def hanging_heavy_top(max_seconds: float) -> tuple[og.Solver, og.Guess]:
+def hanging_heavy_top(max_seconds: float) -> tuple[og.CompiledProblem, og.Guess]:
     """The heavy top with the first-order retraction on fatrop, and a start on which fatrop
     loops forever (once more NaN than :data:`~ocgroupoid.nlp.isolated.NAN_LIMIT` is let
     through)."""
     cfg = files.load(PROBLEMS / "heavy_top_rotors.yaml", [
         "discretization.retraction=first_order", "horizon.N=16", "solver.backend=fatrop"])
     f, d = cfg.file, cfg.file.discretization
-    solver = og.compile(files.build(cfg), 16, d.retraction, d.rule, f.solver.ipopt, d.scheme,
+    solver = og.compile_problem(files.build(cfg), 16, d.retraction, d.rule, f.solver.ipopt, d.scheme,
                         backend="fatrop", max_seconds=max_seconds)
     tr = solver.transcription
     guess = next(g for g in solver.guesses(tr, tr.pack(), True)
@@ -139,7 +139,7 @@ def test_max_seconds_bounds_a_multistart(backend: str) -> None:
     of the starts it ran and the status of the one the limit stopped."""
     cfg = files.load(PROBLEMS / "heavy_top_rotors.yaml", ["horizon.N=128"])
     f, d = cfg.file, cfg.file.discretization
-    solver = og.compile(files.build(cfg), 128, d.retraction, d.rule, f.solver.ipopt,
+    solver = og.compile_problem(files.build(cfg), 128, d.retraction, d.rule, f.solver.ipopt,
                         backend=backend, max_seconds=0.4)
     t0 = time.perf_counter()
     sol = solver.solve(multistart=40, replay=False)

@@ -18,9 +18,9 @@ from typer.testing import CliRunner
 import ocgroupoid as og
 from ocgroupoid.cli import app
 from ocgroupoid.errors import BoundaryError
-from ocgroupoid.models.heavy_top import discrete_casimir, heavy_top
 from ocgroupoid.nlp import Guess, Kind
 from ocgroupoid.solve import interpolate
+from ocgroupoid.systems.heavy_top import discrete_casimir, heavy_top
 
 NS = [32, 64, 128, 256]
 FINE = [512, 1024]
@@ -35,18 +35,18 @@ def observed_orders(values: list[float]) -> np.ndarray:
 
 
 @pytest.fixture(scope="module")
-def runs() -> dict[str, dict[int, tuple[og.Solver, og.Solution]]]:
+def runs() -> dict[str, dict[int, tuple[og.CompiledProblem, og.Solution]]]:
     """Multi-start at N = 32..256, then continuation N = 256 -> 512 -> 1024, per rule."""
     pb = heavy_top()
-    out: dict[str, dict[int, tuple[og.Solver, og.Solution]]] = {}
+    out: dict[str, dict[int, tuple[og.CompiledProblem, og.Solution]]] = {}
     for rule in RULES:
         sols = {}
         for N in NS:
-            solver = og.compile(pb, N=N, rule=rule)
+            solver = og.compile_problem(pb, N=N, rule=rule)
             sols[N] = (solver, solver.solve(multistart=True))
         for N in FINE:
             coarse, sol = sols[N // 2]
-            solver = og.compile(pb, N=N, rule=rule)
+            solver = og.compile_problem(pb, N=N, rule=rule)
             start = interpolate(coarse.transcription, sol.x, sol.p, N)
             sols[N] = (solver, solver.solve(guess=start))
         out[rule] = sols
@@ -150,7 +150,7 @@ def test_discrete_casimir_approximates_pi_dot_gamma_at_second_order(runs) -> Non
 def test_lie_poisson_casimir_identity_for_any_controls(seed: int, mgl: float, N: int) -> None:
     """Gamma_k . Phi_k = C_k - C_{k-1} at every node, for arbitrary velocities (so arbitrary
     rotor torques), not only at solutions: the conservation holds whatever the controls."""
-    tr = og.compile(heavy_top(mgl=mgl), N=N, rule="lie_poisson").transcription
+    tr = og.compile_problem(heavy_top(mgl=mgl), N=N, rule="lie_poisson").transcription
     p = tr.pack()
     xi = np.random.default_rng(seed).normal(scale=2.0, size=(N, 5))
     x = tr.point(Guess("random", xi), p)
@@ -186,7 +186,7 @@ def test_controls_and_multipliers_with_time_stamps(runs) -> None:
 def test_multistart_rotor_guesses_beat_the_natural_guess() -> None:
     """The natural guess (great circle, rotors at rest) lands in the ~28 minimum; the
     model's rotor guesses reach the ~22.9 one, which multi-start keeps and reports."""
-    solver = og.compile(heavy_top(), N=64)
+    solver = og.compile_problem(heavy_top(), N=64)
     plain = solver.solve(multistart=False)
     best = solver.solve(multistart=True)
     assert plain.success and best.success
@@ -215,7 +215,7 @@ def test_shipped_file_finds_the_lowest_minimum(runs, tmp_path) -> None:
 def test_prescribing_omega3_is_rejected_before_ipopt() -> None:
     pb = heavy_top(OmegaT=(0.0, 0.0, 5 * np.cos(0.4)))  # even the consistent value
     with pytest.raises(BoundaryError, match=r"final\.Omega\[2\].*Pi\.Gamma.*free \(null\)"):
-        og.compile(pb, N=16)
+        og.compile_problem(pb, N=16)
 
 
 def test_three_equations_for_gamma_are_rejected_before_ipopt() -> None:
@@ -223,7 +223,7 @@ def test_three_equations_for_gamma_are_rejected_before_ipopt() -> None:
     pb.final_condition("Gamma=e3", pb.state("Gamma") - ca.DM([0.0, 0.0, 1.0]))
     with pytest.raises(BoundaryError, match=r"'Gamma=e3' imposes 3 equations.*only 2 are "
                                             r"independent.*S\^2 is two conditions"):
-        og.compile(pb, N=16)
+        og.compile_problem(pb, N=16)
 
 
 def test_two_equations_for_gamma_are_accepted_but_have_two_roots() -> None:
@@ -232,8 +232,8 @@ def test_two_equations_for_gamma_are_accepted_but_have_two_roots() -> None:
     the target instead (one root)."""
     pb = heavy_top(GammaT=None)
     pb.final_condition("Gamma1,2=0", pb.state("Gamma")[:2])
-    sol = og.compile(pb, N=32).solve(multistart=True)
-    up = og.compile(heavy_top(), N=32).solve(multistart=True)
+    sol = og.compile_problem(pb, N=32).solve(multistart=True)
+    up = og.compile_problem(heavy_top(), N=32).solve(multistart=True)
     for s in (sol, up):  # solved; at N = 32 a plan may still miss by more than 1%
         assert s.status == "Solve_Succeeded"
         assert all(f.startswith("the plan does not land")
@@ -262,7 +262,7 @@ def test_set_overrides_match_the_python_api(tmp_path) -> None:
     result = CliRunner().invoke(app, args)
     assert result.exit_code == 0, result.output
     sol = og.Solution.from_json(out)
-    ref = og.compile(heavy_top(J=(0.12, 0.08), mgl=1.5, dthetaT=(0.5, None)), N=32,
+    ref = og.compile_problem(heavy_top(J=(0.12, 0.08), mgl=1.5, dthetaT=(0.5, None)), N=32,
                      rule="lie_poisson").solve(multistart=True)
     assert sol.N == 32 and sol.discretization["rule"] == "lie_poisson"
     assert sol.cost == pytest.approx(ref.cost, rel=1e-8)
@@ -270,7 +270,7 @@ def test_set_overrides_match_the_python_api(tmp_path) -> None:
 
 
 def runs_cost_default_N32() -> float:
-    return og.compile(heavy_top(), N=32, rule="lie_poisson").solve(multistart=True).cost
+    return og.compile_problem(heavy_top(), N=32, rule="lie_poisson").solve(multistart=True).cost
 
 
 def test_a_diverging_solve_fails_fast_with_a_hint(tmp_path) -> None:
@@ -293,4 +293,4 @@ def test_a_false_conservation_law_is_rejected() -> None:
     pb = heavy_top()
     pb.conserved("Omega1", pb.velocity("Omega")[0])
     with pytest.raises(og.ConfigError, match=r"'Omega1' is not conserved by the dynamics"):
-        og.compile(pb, N=16)
+        og.compile_problem(pb, N=16)

@@ -18,8 +18,8 @@ from ocgroupoid.cli import app
 from ocgroupoid.errors import ConfigError, OcgError
 from ocgroupoid.files.expressions import compile_expression
 from ocgroupoid.model.values import number
-from ocgroupoid.models.rigid_body import rigid_body
 from ocgroupoid.nlp.program import casadi_name
+from ocgroupoid.systems.rigid_body import rigid_body
 
 ROOT = Path(__file__).resolve().parent.parent
 SO3 = (ROOT / "problems" / "so3_rest_to_rest.yaml").read_text().replace("N: 64", "N: 16")

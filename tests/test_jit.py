@@ -12,8 +12,8 @@ import pytest
 
 import ocgroupoid as og
 from ocgroupoid.errors import ConfigError
-from ocgroupoid.models.heavy_top import heavy_top
-from ocgroupoid.models.rigid_body import rigid_body
+from ocgroupoid.systems.heavy_top import heavy_top
+from ocgroupoid.systems.rigid_body import rigid_body
 
 needs_cc = pytest.mark.skipif(not any(shutil.which(c) for c in ("cc", "gcc", "clang")),
                               reason="no C compiler on PATH")
@@ -29,8 +29,8 @@ def own_cache(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
 @pytest.mark.parametrize("factory, scheme", [(rigid_body, "order2"), (rigid_body, "order4"),
                                              (heavy_top, "order2"), (rigid_body, "rk4_quat")])
 def test_a_compiled_solve_equals_the_virtual_machine_solve(factory, scheme: str) -> None:
-    vm = og.compile(factory(), N=24, scheme=scheme).solve(multistart=False)
-    solver = og.compile(factory(), N=24, scheme=scheme, jit=True)
+    vm = og.compile_problem(factory(), N=24, scheme=scheme).solve(multistart=False)
+    solver = og.compile_problem(factory(), N=24, scheme=scheme, jit=True)
     assert solver.transcription.jit and solver.transcription.jit_compiled
     jit = solver.solve(multistart=False)
     assert jit.status == vm.status and jit.iterations == vm.iterations
@@ -40,10 +40,10 @@ def test_a_compiled_solve_equals_the_virtual_machine_solve(factory, scheme: str)
 
 @needs_cc
 def test_the_library_is_cached_per_structure(own_cache: Path) -> None:
-    first = og.compile(rigid_body(), N=16, jit=True).transcription
-    again = og.compile(rigid_body(inertia=[3.0, 2.0, 1.0]), N=16, jit=True)
+    first = og.compile_problem(rigid_body(), N=16, jit=True).transcription
+    again = og.compile_problem(rigid_body(inertia=[3.0, 2.0, 1.0]), N=16, jit=True)
     assert first.jit_compiled and not again.transcription.jit_compiled  # values are inputs
-    other = og.compile(rigid_body(), N=20, jit=True).transcription
+    other = og.compile_problem(rigid_body(), N=20, jit=True).transcription
     assert other.jit_compiled  # another N is another structure
     assert len(list(own_cache.glob("ocg_jit_*.so"))) == 2
     assert not list(own_cache.glob(".*"))  # no half-written library left
@@ -53,7 +53,7 @@ def test_without_a_compiler_jit_says_what_to_do(monkeypatch: pytest.MonkeyPatch)
     monkeypatch.setenv("PATH", "/nonexistent")
     monkeypatch.delenv("CC", raising=False)
     with pytest.raises(ConfigError, match="solver.jit needs a C compiler"):
-        og.compile(rigid_body(), N=12, jit=True)
+        og.compile_problem(rigid_body(), N=12, jit=True)
 
 
 @needs_cc
@@ -77,7 +77,7 @@ def test_a_primal_dual_warm_start_reaches_the_cold_solution_in_fewer_iterations(
     multipliers (IPOPT's warm_start_init_point); same cost as a cold solve."""
     from ocgroupoid.lie import so3
 
-    solver = og.compile(rigid_body(), N=32)
+    solver = og.compile_problem(rigid_body(), N=32)
     prev = solver.solve()
     axis = np.array([1.0, 2.0, 3.0]) / np.sqrt(14.0)
     for k in (1, 2, 3):
@@ -89,4 +89,4 @@ def test_a_primal_dual_warm_start_reaches_the_cold_solution_in_fewer_iterations(
         assert warm.iterations < cold.iterations, (warm.iterations, cold.iterations)
         prev = warm
     with pytest.raises(ConfigError, match="same compiled problem"):
-        og.compile(rigid_body(), N=16).solve(warm=prev)
+        og.compile_problem(rigid_body(), N=16).solve(warm=prev)

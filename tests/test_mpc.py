@@ -21,7 +21,7 @@ from ocgroupoid.mpc.plant import Plant, mismatched
 from ocgroupoid.mpc.rti import Iterate, RealTimeIteration
 from ocgroupoid.nlp.transcription import Guess
 from ocgroupoid.solve.readout import control_ppoly
-from ocgroupoid.solve.replay import terminal_errors
+from ocgroupoid.verify.replay import terminal_errors
 
 FILE = "problems/so3_rest_to_rest.yaml"
 N = 16
@@ -55,7 +55,7 @@ def test_closed_loop_reaches_the_target_under_mismatch_and_noise(
     assert r.failed_steps == 0, [s.status for s in r.steps]
     assert r.terminal_error["Omega"] < 5 * SIGMA
     assert r.terminal_error["R"] < 1e-4
-    solver = og.compile(problem, N)
+    solver = og.compile_problem(problem, N)
     tr = solver.transcription
     p = tr.pack()
     first = tr.solve(tr.guesses(p)[0], p)
@@ -96,7 +96,7 @@ def test_rti_step_is_a_tangential_predictor(problem: og.Problem, scale: float) -
     the exact Hessian for a state measured Delta away lands O(|Delta|^2) from the exact
     solution for it, while the solution itself moves O(|Delta|). With Delta = 1e-2 (velocity)
     the error is < 1e-4 and < 1 % of the move; halving Delta divides it by about 4 (> 3)."""
-    tr = og.compile(problem, N).transcription
+    tr = og.compile_problem(problem, N).transcription
     p = tr.pack()
     sol = tr.solve(tr.guesses(p)[0], p)
     rti = RealTimeIteration(tr, hessian="exact")
@@ -215,7 +215,7 @@ def test_stage_projection_keeps_definite_blocks_and_lifts_the_rest() -> None:
 def test_rti_refuses_an_unknown_hessian(problem: og.Problem) -> None:
     """An unknown Hessian is a ConfigError naming the choices."""
     with pytest.raises(ConfigError, match="projected, exact"):
-        RealTimeIteration(og.compile(problem, N).transcription, hessian="gauss-newton")
+        RealTimeIteration(og.compile_problem(problem, N).transcription, hessian="gauss-newton")
 
 
 def test_outputs(disturbed: og.MpcResult, tmp_path) -> None:  # type: ignore[no-untyped-def]

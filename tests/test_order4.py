@@ -17,9 +17,9 @@ import ocgroupoid as og
 from ocgroupoid import files
 from ocgroupoid.cli import app
 from ocgroupoid.errors import ConfigError
-from ocgroupoid.models.heavy_top import heavy_top
-from ocgroupoid.models.rigid_body import INERTIA, TARGET, rigid_body
 from ocgroupoid.solve import interpolate
+from ocgroupoid.systems.heavy_top import heavy_top
+from ocgroupoid.systems.rigid_body import INERTIA, TARGET, rigid_body
 
 from .test_api_general import cubic, minimum_acceleration
 
@@ -134,12 +134,12 @@ def same_minimum(costs: list[float]) -> None:
 def top() -> dict[int, og.Solution]:
     """Multi-start at N = 32, then each grid started from the previous solution."""
     pb = heavy_top()
-    solver = og.compile(pb, N=HT_NS[0], scheme="order4")
+    solver = og.compile_problem(pb, N=HT_NS[0], scheme="order4")
     out = {HT_NS[0]: solver.solve(multistart=True)}
     for N in HT_NS[1:]:
         prev = out[N // 2]
         guess = interpolate(solver.transcription, prev.x, prev.p, N)
-        solver = og.compile(pb, N=N, scheme="order4")
+        solver = og.compile_problem(pb, N=N, scheme="order4")
         out[N] = solver.solve(guess=guess)
     return out
 
@@ -160,16 +160,16 @@ def test_heavy_top_converges_at_fourth_order(top) -> None:
 
 def test_heavy_top_continues_from_an_order2_solution(top) -> None:
     """An order2 solution, interpolated, starts order4 on a finer grid: same minimum."""
-    coarse = og.compile(heavy_top(), N=32)
+    coarse = og.compile_problem(heavy_top(), N=32)
     sol2 = coarse.solve(multistart=True)
     guess = interpolate(coarse.transcription, sol2.x, sol2.p, 64)
-    sol4 = og.compile(heavy_top(), N=64, scheme="order4").solve(guess=guess)
+    sol4 = og.compile_problem(heavy_top(), N=64, scheme="order4").solve(guess=guess)
     assert sol4.success and sol4.cost == pytest.approx(top[64].cost, rel=1e-9)
 
 
 def test_order2_rules_are_refused_by_order4() -> None:
     with pytest.raises(ConfigError, match="rule 'lie_poisson'.*order2.*Gauss points"):
-        og.compile(heavy_top(), N=8, scheme="order4", rule="lie_poisson")
+        og.compile_problem(heavy_top(), N=8, scheme="order4", rule="lie_poisson")
 
 
 # ------------------------------------------------------------------ plate-ball files
@@ -181,7 +181,7 @@ PB_NS = [8, 16, 32, 64]
 def test_plate_ball_converges_at_fourth_order(name: str) -> None:
     cfg = files.load(ROOT / "problems" / f"{name}.yaml", ["discretization.scheme=order4"])
     pb = files.build(cfg)
-    sols = {N: og.compile(pb, N=N, scheme="order4").solve(multistart=True) for N in PB_NS}
+    sols = {N: og.compile_problem(pb, N=N, scheme="order4").solve(multistart=True) for N in PB_NS}
     for sol in sols.values():
         assert_clean(sol)
     costs = [sols[N].cost for N in PB_NS]

@@ -17,10 +17,10 @@ from typer.testing import CliRunner
 import ocgroupoid as og
 from ocgroupoid import files
 from ocgroupoid.cli import app
-from ocgroupoid.models.plate_ball import plate_ball
 from ocgroupoid.nlp import Kind
 from ocgroupoid.solve import distinct_minima, interpolate
 from ocgroupoid.solve.guesses import model_guesses
+from ocgroupoid.systems.plate_ball import plate_ball
 
 from .lie_oracles import vee_skew
 
@@ -44,7 +44,7 @@ def runs() -> dict[tuple[float, str], dict[int, og.Solution]]:
     for Om in OMEGAS:
         pb = plate_ball(Omega_p=Om)
         for rule in RULES:
-            solvers = {N: og.compile(pb, N=N, retraction=rule) for N in [*NS, FINE]}
+            solvers = {N: og.compile_problem(pb, N=N, retraction=rule) for N in [*NS, FINE]}
             sols = {N: solvers[N].solve(multistart=True) for N in NS}
             coarse = sols[NS[-1]]
             start = interpolate(solvers[NS[-1]].transcription, coarse.x, coarse.p, FINE)
@@ -104,7 +104,7 @@ def test_right_loops_find_the_two_mirror_minima(rule: str) -> None:
     """Omega_p = 0: the model's loops to the right, early and late (mirror images of each
     other), lead to the best path and to its mirror image, of equal cost, at every N."""
     for N in NS:
-        tr = og.compile(plate_ball(), N=N, retraction=rule).transcription
+        tr = og.compile_problem(plate_ball(), N=N, retraction=rule).transcription
         p = tr.pack()
         guesses = {g.label: g for g in model_guesses(tr, p, tr.guesses(p)[0])}
         ends = []
@@ -138,7 +138,7 @@ def test_rotating_plate_breaks_the_mirror_symmetry(rule: str) -> None:
     minima of equal cost on the fixed plate do not here: they meet one minimum, or two of
     clearly different cost."""
     for N in (32, 64):
-        tr = og.compile(plate_ball(Omega_p=1.0), N=N, retraction=rule).transcription
+        tr = og.compile_problem(plate_ball(Omega_p=1.0), N=N, retraction=rule).transcription
         p = tr.pack()
         guesses = {g.label: g for g in model_guesses(tr, p, tr.guesses(p)[0])}
         a, b = (tr.solve(guesses[label], p) for label in ("loop right, early",
@@ -297,7 +297,7 @@ def test_model_guesses_roll_and_reach_the_final_position() -> None:
     """Every bend guess satisfies the discrete rolling constraints and the final position
     exactly (only the attitude is left to IPOPT), for any parameters."""
     pb = plate_ball(r=0.7, Omega_p=0.8, c=0.2, xyT=(-0.4, 1.3))
-    tr = og.compile(pb, N=16).transcription
+    tr = og.compile_problem(pb, N=16).transcription
     p = tr.pack()
     guesses = [(g.label, g.xi) for g in model_guesses(tr, p, tr.guesses(p)[0])]
     assert [label for label, _ in guesses] == ["loop right, early", "loop right, late",

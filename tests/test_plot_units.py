@@ -23,7 +23,7 @@ import pytest
 import ocgroupoid as og
 from ocgroupoid import files
 from ocgroupoid.errors import ConfigError
-from ocgroupoid.models.quadrotor import quadrotor
+from ocgroupoid.systems.quadrotor import quadrotor
 
 matplotlib.use("Agg")
 
@@ -37,7 +37,7 @@ def cheap(path: Path) -> og.Solution:
     """A solution of a problem file at N = 6 after at most 30 iterations (not verified)."""
     cfg = files.load(path, [f"horizon.N={N}", "solver.ipopt.max_iter=30"])
     f, d = cfg.file, cfg.file.discretization
-    solver = og.compile(files.build(cfg), N, d.retraction, d.rule, f.solver.ipopt, d.scheme,
+    solver = og.compile_problem(files.build(cfg), N, d.retraction, d.rule, f.solver.ipopt, d.scheme,
                         d.steps)
     return solver.solve(multistart=False)
 

@@ -24,7 +24,7 @@ from ocgroupoid import files
 from ocgroupoid.cli import app
 from ocgroupoid.errors import ConfigError
 from ocgroupoid.export.codegen import export_c
-from ocgroupoid.models.rigid_body import rigid_body
+from ocgroupoid.systems.rigid_body import rigid_body
 
 from .dubins_exact import CASES
 
@@ -41,7 +41,7 @@ def solve_file(name: str, *sets: str) -> og.Solution:
     """A problem file solved at N = 12 from the first guess (no multi-start: fast)."""
     cfg = files.load(PROBLEMS / f"{name}.yaml", [f"horizon.N={N}", *sets])
     f, d = cfg.file, cfg.file.discretization
-    solver = og.compile(files.build(cfg), f.horizon.N, d.retraction, d.rule, f.solver.ipopt,
+    solver = og.compile_problem(files.build(cfg), f.horizon.N, d.retraction, d.rule, f.solver.ipopt,
                         d.scheme, d.steps)
     sol = solver.solve(multistart=False)
     assert sol.success, sol.status

@@ -21,7 +21,7 @@ from typer.testing import CliRunner
 import ocgroupoid as og
 from ocgroupoid.cli import app
 from ocgroupoid.errors import ConfigError
-from ocgroupoid.models.quadrotor import quadrotor
+from ocgroupoid.systems.quadrotor import quadrotor
 
 from . import quadrotor_reference as ref
 
@@ -284,8 +284,8 @@ def test_continuation_reports_a_grid_that_lands_above_the_coarse_minimum(monkeyp
     """The first interpolation onto the fine grid is spoiled (the long way round): the fine
     grid lands above the minimum the coarse grid found; the solver bridges through the
     doublings, keeps the better solution and says so."""
-    from ocgroupoid.models.rigid_body import rigid_body
-    from ocgroupoid.solve import solver as solver_module
+    from ocgroupoid.solve import compiled as solver_module
+    from ocgroupoid.systems.rigid_body import rigid_body
 
     real = solver_module.interpolate
     calls = {"n": 0}
@@ -299,7 +299,7 @@ def test_continuation_reports_a_grid_that_lands_above_the_coarse_minimum(monkeyp
 
     monkeypatch.setattr(solver_module, "interpolate", spoiled)
     pb = rigid_body()
-    sol = og.compile(pb, N=64).solve(continuation=[16])
+    sol = og.compile_problem(pb, N=64).solve(continuation=[16])
     notes = sol.diagnostics.get("continuation", [])
     assert notes and "landed at cost" in notes[0] and "kept" in notes[0], notes
     direct = og.solve(pb, N=64)

@@ -8,9 +8,9 @@ import pytest
 
 import ocgroupoid as og
 from ocgroupoid.errors import BoundaryError, ConfigError
-from ocgroupoid.models.rigid_body import rigid_body
 from ocgroupoid.nlp import make_scheme
-from ocgroupoid.solve.simulate import DiscreteFlow
+from ocgroupoid.simulation.simulate import DiscreteFlow
+from ocgroupoid.systems.rigid_body import rigid_body
 
 from .lie_oracles import vee_skew
 
@@ -78,7 +78,7 @@ def test_every_retraction_is_second_order() -> None:
 
 def test_parameters_change_without_rebuilding(monkeypatch) -> None:
     """Inertia, boundary values and T go through p: one compiled solver serves them all."""
-    solver = og.compile(rigid_body(), N=48)
+    solver = og.compile_problem(rigid_body(), N=48)
     first = solver.solve()
 
     def no_build(*args, **kwargs):
@@ -97,7 +97,7 @@ def test_parameters_change_without_rebuilding(monkeypatch) -> None:
 
 
 def test_structure_changes_are_refused() -> None:
-    solver = og.compile(rigid_body(), N=16)
+    solver = og.compile_problem(rigid_body(), N=16)
     with pytest.raises(BoundaryError, match="build a new Transcription"):
         solver.solve(final={"Omega": None})
 
@@ -106,7 +106,7 @@ def test_multistart_finds_the_long_way_round() -> None:
     """A 160 degree slew with the body spinning the other way: the cheap path turns long."""
     pb = rigid_body(RT=og.so3.from_axis_angle([0, 0, 1], 2.8), Omega0=[0, 0, -3.0], T=2.0,
                     name="long_way")
-    solver = og.compile(pb, N=64)
+    solver = og.compile_problem(pb, N=64)
     plain = solver.solve(multistart=False)
     multi = solver.solve(multistart=True)
     assert plain.success and multi.success
@@ -120,7 +120,7 @@ def test_multistart_finds_the_long_way_round() -> None:
 def test_continuation_matches_direct_solve() -> None:
     pb = rigid_body()
     direct = og.solve(pb, N=128)
-    cont = og.compile(pb, N=128).solve(continuation=[16, 32])
+    cont = og.compile_problem(pb, N=128).solve(continuation=[16, 32])
     assert cont.success and cont.discretization["start"] == "interpolated from N=32"
     assert cont.cost == pytest.approx(direct.cost, rel=1e-9)
 
@@ -128,7 +128,7 @@ def test_continuation_matches_direct_solve() -> None:
 def test_terminal_condition_has_no_root_at_a_half_turn() -> None:
     """A final R at relative rotation pi satisfies skew(R_T^T R) = 0 but not our condition."""
     pb = rigid_body()
-    tr = og.compile(pb, N=16).transcription
+    tr = og.compile_problem(pb, N=16).transcription
     p = tr.pack()
     RT = pb.groupoid.factors[0].matrix(p[tr.layout.p_slices["end"]])
     fake = pb.groupoid.factors[0].parse_state(RT @ og.so3.from_axis_angle([1, -1, 2], np.pi))
@@ -153,8 +153,8 @@ def test_solution_json_round_trip(tmp_path, sols) -> None:
 
 def test_bad_discretisation_is_named() -> None:
     with pytest.raises(ConfigError, match="N must be an integer >= 2"):
-        og.compile(rigid_body(), N=1)
+        og.compile_problem(rigid_body(), N=1)
     with pytest.raises(ConfigError, match="unknown retraction 'cay'"):
-        og.compile(rigid_body(), N=8, retraction="cay")
+        og.compile_problem(rigid_body(), N=8, retraction="cay")
     with pytest.raises(ConfigError, match="horizon T must be finite and > 0"):
         rigid_body(T=-1.0)

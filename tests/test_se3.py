@@ -22,9 +22,9 @@ import pytest
 import ocgroupoid as og
 from ocgroupoid import files
 from ocgroupoid.lie import se3, so3
-from ocgroupoid.models.rigid_body_se3 import INERTIA, MASS, free_flyer
 from ocgroupoid.nlp import make_scheme
-from ocgroupoid.solve.simulate import DiscreteFlow
+from ocgroupoid.simulation.simulate import DiscreteFlow
+from ocgroupoid.systems.rigid_body_se3 import INERTIA, MASS, free_flyer
 
 ROOT = Path(__file__).resolve().parent.parent
 NS = [16, 32, 64, 128]

@@ -14,9 +14,9 @@ import pytest
 
 import ocgroupoid as og
 from ocgroupoid.errors import ConfigError, DimensionError, SolverError
-from ocgroupoid.models.heavy_top import heavy_top
-from ocgroupoid.models.plate_ball import plate_ball
-from ocgroupoid.models.rigid_body import rigid_body
+from ocgroupoid.systems.heavy_top import heavy_top
+from ocgroupoid.systems.plate_ball import plate_ball
+from ocgroupoid.systems.rigid_body import rigid_body
 
 H, STEPS = 0.1, 100_000
 INERTIA = np.array([1.0, 2.0, 3.0])

@@ -90,7 +90,7 @@ def solo_cost(values: dict[str, Any]) -> tuple[bool, float]:
     """A point solved alone: its own file, its own NLP."""
     cfg = files.load(SO3, SETS + [f"{k}={yaml_text(v)}" for k, v in values.items()])
     f, d = cfg.file, cfg.file.discretization
-    sol = og.compile(files.build(cfg), f.horizon.N, d.retraction, d.rule, f.solver.ipopt,
+    sol = og.compile_problem(files.build(cfg), f.horizon.N, d.retraction, d.rule, f.solver.ipopt,
                      d.scheme).solve()
     return sol.success, sol.cost
 

@@ -1,4 +1,4 @@
-"""Success means verified (ocgroupoid.solve.verdict): dependent conditions, under-resolved
+"""Success means verified (ocgroupoid.verify.verdict): dependent conditions, under-resolved
 grids and extreme parameters are not reported as clean successes; Ctrl-C and progress."""
 
 from __future__ import annotations
@@ -15,10 +15,10 @@ import pytest
 
 import ocgroupoid as og
 from ocgroupoid import files
-from ocgroupoid.models.heavy_top import heavy_top
-from ocgroupoid.models.rigid_body import rigid_body
-from ocgroupoid.solve.dependencies import dependent_conditions
-from ocgroupoid.solve.verdict import check_tolerance, suggested_N
+from ocgroupoid.systems.heavy_top import heavy_top
+from ocgroupoid.systems.rigid_body import rigid_body
+from ocgroupoid.verify.dependencies import dependent_conditions
+from ocgroupoid.verify.verdict import check_tolerance, suggested_N
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_bounds_time import minimum_time  # noqa: E402
@@ -58,7 +58,7 @@ def test_without_the_redundant_condition_the_wheels_solve_cleanly() -> None:
 
 
 def test_rank_test_finds_nothing_on_independent_conditions() -> None:
-    solver = og.compile(rigid_body(), N=16)
+    solver = og.compile_problem(rigid_body(), N=16)
     sol = solver.solve(multistart=False)
     tr = solver.transcription
     assert sol.success and dependent_conditions(tr, sol.x, sol.p) == []
@@ -153,17 +153,17 @@ def test_default_cli_call_finds_the_better_minimum_of_a_new_instance(tmp_path: P
 
 def test_progress_reports_ipopt_iterations(monkeypatch: pytest.MonkeyPatch) -> None:
     """The iteration callback reaches ``progress``: iteration, objective, infeasibility."""
-    monkeypatch.setattr(importlib.import_module("ocgroupoid.solve.solver"), "PROGRESS_EVERY",
+    monkeypatch.setattr(importlib.import_module("ocgroupoid.solve.compiled"), "PROGRESS_EVERY",
                         0.0)
     heard: list[str] = []
-    og.compile(heavy_top(), N=32).solve(multistart=False, progress=heard.append)
+    og.compile_problem(heavy_top(), N=32).solve(multistart=False, progress=heard.append)
     lines = [h for h in heard if "iteration" in h]
     assert lines and "objective" in lines[-1] and "infeasibility" in lines[-1]
 
 
 def test_ctrl_c_stops_the_solve_with_the_best_point_so_far() -> None:
     """SIGINT during IPOPT: the starts stop, status interrupted, success false, no raise."""
-    solver = og.compile(heavy_top(), N=128)
+    solver = og.compile_problem(heavy_top(), N=128)
     solver.solve(multistart=False)  # build the watched solver once
     before = signal.getsignal(signal.SIGINT)  # a pytest-xdist worker starts with SIG_IGN
     pid = os.getpid()

@@ -17,7 +17,7 @@ from typer.testing import CliRunner
 import ocgroupoid as og
 from ocgroupoid import files
 from ocgroupoid.cli import app
-from ocgroupoid.models.rigid_body import rigid_body
+from ocgroupoid.systems.rigid_body import rigid_body
 
 from . import dubins_exact as dubins
 from .cbuild import CFLAGS  # noqa: E402
@@ -221,7 +221,7 @@ def test_no_success_without_a_completed_replay(name: str, scheme: str, steps: st
                       f"discretization.scheme={scheme}", f"discretization.steps={steps}"])
     pb, f = files.build(cfg), cfg.file
     try:
-        sol = og.compile(pb, 16, f.discretization.retraction, f.discretization.rule,
+        sol = og.compile_problem(pb, 16, f.discretization.retraction, f.discretization.rule,
                          f.solver.ipopt, scheme, steps).solve()
     except og.ConfigError:
         return  # a combination the problem refuses (a rule of order2 only, ...)
@@ -232,7 +232,7 @@ def test_no_success_without_a_completed_replay(name: str, scheme: str, steps: st
         tol = sol.diagnostics["verdict"]["tolerances"]["landing"]
         assert all(e <= tol[n] for n, e in rep["terminal_error"].items())
         assert "estimate" in sol.diagnostics
-    sol2 = og.compile(pb, 16, f.discretization.retraction, f.discretization.rule,
+    sol2 = og.compile_problem(pb, 16, f.discretization.retraction, f.discretization.rule,
                       f.solver.ipopt, scheme, steps).solve(replay=False)
     assert not sol2.success  # nothing checked: never a success
 
@@ -259,7 +259,7 @@ def test_an_infeasible_single_start_suggests_multistart() -> None:
     from ocgroupoid.nlp.transcription import RawResult
     from ocgroupoid.solve.hints import hint_for
 
-    tr = og.compile(dubins_problem((1.0, 1.0, np.pi)), N=8, scheme="order4").transcription
+    tr = og.compile_problem(dubins_problem((1.0, 1.0, np.pi)), N=8, scheme="order4").transcription
     p = tr.pack()
     x = tr.point(tr.guesses(p)[0], p)
     r = RawResult("geodesic", x, p, np.zeros(tr.ng), 0.0, "Infeasible_Problem_Detected",
@@ -312,7 +312,7 @@ def test_the_exported_solver_gives_the_same_verdict(tmp_path, N: int) -> None:
     import json
     import subprocess
 
-    solver = og.compile(turn(True), N=N, ipopt={"tol": 1e-10})
+    solver = og.compile_problem(turn(True), N=N, ipopt={"tol": 1e-10})
     py = solver.solve()
     exp = og.export_c(solver, tmp_path / "c", build=True, cflags=CFLAGS)
     c = json.loads(subprocess.run([str(exp.binary)], capture_output=True, text=True,

@@ -190,7 +190,7 @@ def no_solve(monkeypatch):
         raise AssertionError("the solve started before the output paths were checked")
 
     # the module (the package's attribute `solve` is the function of that name)
-    monkeypatch.setattr(importlib.import_module("ocgroupoid.solve"), "compile", refuse)
+    monkeypatch.setattr(importlib.import_module("ocgroupoid.solve"), "compile_problem", refuse)
 
 
 def bad_outputs(tmp_path: Path) -> list[tuple[list[str], str]]:
@@ -371,7 +371,7 @@ def test_tutorial_snippets_for_products_and_reading_solutions_run(tmp_path: Path
     code = "\n".join([
         "import casadi as ca, numpy as np", "import ocgroupoid as og", product,
         "assert sol3.success and sol3.controls.shape == (17, 5)",
-        "from ocgroupoid.models.rigid_body import rigid_body",
+        "from ocgroupoid.systems.rigid_body import rigid_body",
         "og.solve(rigid_body(), N=8).to_json('sol.json')", reading,
         "assert sol.states['R'].shape == (9, 3, 3) and sol.control_names == ['u1', 'u2', 'u3']"])
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,

@@ -11,7 +11,7 @@ and a PNG.
 The scripts of ``scripts/`` are built on the same modules: their command line and progress
 bar (:mod:`~ocgroupoid.bench.script`), medians (:mod:`~ocgroupoid.bench.timing`), summaries
 with the machine (:mod:`~ocgroupoid.bench.record`), observed orders
-(:mod:`~ocgroupoid.solve.richardson`); ``scripts/bench_schemes.py`` runs the work-precision
+(:mod:`~ocgroupoid.verify.richardson`); ``scripts/bench_schemes.py`` runs the work-precision
 of every problem file.
 
 Nothing is imported here: the command line (:mod:`~ocgroupoid.bench.commands`) registers

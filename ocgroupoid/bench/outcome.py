@@ -6,7 +6,7 @@ In order of precedence:
 * ``other minimum``: the attitude turns another way than the reference (its net turn about
   the manoeuvre's axis differs by more than :data:`TURN` rad: the long way round);
 * ``off target``: the controls replayed through the continuous dynamics miss a prescribed
-  final value by more than :data:`~ocgroupoid.solve.verdict.REPLAY_TOLERANCE` (5%) of the
+  final value by more than :data:`~ocgroupoid.verify.verdict.REPLAY_TOLERANCE` (5%) of the
   distance it covers (the verdict's measure);
 * ``off group``: a state is off its manifold by more than :data:`MANIFOLD`, as reported or in
   the baseline's own coordinates (:mod:`~ocgroupoid.bench.drift`);
@@ -26,7 +26,7 @@ from scipy.spatial.transform import Rotation
 
 from ..nlp.transcription import Transcription
 from ..solve import Solution
-from ..solve.verdict import REPLAY_TOLERANCE, scales
+from ..verify.verdict import REPLAY_TOLERANCE, scales
 from .drift import coordinate_drift
 from .methods import Method
 

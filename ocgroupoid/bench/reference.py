@@ -5,7 +5,7 @@
    in the multi-start's order that reaches it (the timed solves start there); the distinct
    minima met (:mod:`~ocgroupoid.bench.minimum` tells rows in another one by them).
 2. order4 continued to N/4, N/2, N (each grid started from the last, interpolated), then
-   Richardson for order 4 (:mod:`~ocgroupoid.solve.richardson`):
+   Richardson for order 4 (:mod:`~ocgroupoid.verify.richardson`):
    ``J_ref = J_N + (J_N - J_{N/2}) / 15``.
 3. The check, another family: RK4 shooting on unit quaternions (``rk4_quat``) on N/4, N/2
    and N, started from the order4 solutions, Richardson with the order its three costs show
@@ -29,7 +29,7 @@ from ..errors import ConfigError, SolverError
 from ..model.problem import Problem
 from ..nlp.transcription import RawResult
 from ..solve import Solution, distinct_minima, interpolate, make_solution
-from ..solve.richardson import observed_order, relative, richardson_error
+from ..verify.richardson import observed_order, relative, richardson_error
 from .methods import Method
 from .minimum import SAME_COST
 from .timing import Setting

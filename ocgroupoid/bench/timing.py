@@ -4,7 +4,7 @@ The NLP is built once (not timed); IPOPT then runs ``repeats`` times from the sa
 geodesic, or the multi-start guess labelled ``start`` that found the reference's minimum)
 without an iteration callback, more often when it is fast (until the runs add up to
 :data:`MIN_SECONDS`, at most :data:`MAX_REPEATS`), and the median of its wall times is the
-row's time. The last run is read out and diagnosed as :meth:`~ocgroupoid.solve.Solver.solve`
+row's time. The last run is read out and diagnosed as :meth:`~ocgroupoid.solve.CompiledProblem.solve`
 does (replay, verdict, hint).
 """
 
@@ -18,7 +18,7 @@ from typing import Any, Callable, TypeVar
 from ..model.problem import Problem
 from ..nlp.method import DEFAULT_STEPS
 from ..nlp.transcription import Guess
-from ..solve import Solution, Solver, compile, distinct_minima, make_solution
+from ..solve import CompiledProblem, Solution, compile_problem, distinct_minima, make_solution
 from .methods import Method
 
 MIN_SECONDS = 0.25  # a solve faster than this is repeated until the repeats add up to it,
@@ -34,9 +34,9 @@ class Setting:
     rule: str
     steps: str = DEFAULT_STEPS
 
-    def compile(self, problem: Problem, method: Method, N: int) -> Solver:
+    def compile(self, problem: Problem, method: Method, N: int) -> CompiledProblem:
         """``method`` compiled on N intervals in this setting."""
-        return compile(problem, method.on(N, self.rule, self.steps), method.options(self.ipopt))
+        return compile_problem(problem, method.on(N, self.rule, self.steps), method.options(self.ipopt))
 
 
 @dataclass

@@ -22,7 +22,7 @@ def check(
     Exits 2 when the file is invalid or a boundary condition is redundant.
     """
     from .. import files
-    from ..solve.auto import AUTO_SCHEMES
+    from ..solve.accuracy import AUTO_SCHEMES
     from ..solve.checks import check as run_check
 
     try:

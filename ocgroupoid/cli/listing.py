@@ -17,8 +17,8 @@ CUSTOM_SUMMARY = ("your own model, written in the problem file: a definition sec
 def list_models() -> None:
     """Built-in models, discretisation schemes and the problem files shipped in problems/."""
     from ..lie.retraction import RETRACTION_NAMES
-    from ..models import MODELS
     from ..nlp.schemes import SCHEMES
+    from ..systems import MODELS
 
     t = Table(title="models")
     t.add_column("model")

@@ -26,7 +26,7 @@ def solve(
 ) -> None:
     """Build, solve and summarise a problem file; optionally write the solution JSON."""
     from .. import files
-    from ..solve import compile as compile_problem
+    from ..solve import compile_problem as compile_problem
 
     try:
         cfg = files.load(file, set_)
@@ -78,7 +78,7 @@ def solve(
 
 
 def _solve_to_accuracy(problem: Any, f: Any, quiet: bool) -> Any:
-    """``horizon.N: auto``: the grid search of :mod:`ocgroupoid.solve.auto`, one line per
+    """``horizon.N: auto``: the grid search of :mod:`ocgroupoid.solve.accuracy`, one line per
     grid on stderr as it is done."""
     from ..solve import solve_to_accuracy
 

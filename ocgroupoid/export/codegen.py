@@ -57,9 +57,9 @@ from ..nlp.parameters import ParameterValues
 from ..nlp.program import C_READOUT_OUTPUTS
 from ..nlp.shortcuts import choose
 from ..nlp.transcription import Transcription
+from ..solve.compiled import CompiledProblem
 from ..solve.outputs import write_atomic
-from ..solve.solver import Solver
-from ..solve.verify_graph import CHECKS, FIGURES
+from ..verify.graph import CHECKS, FIGURES
 from .build import casadi_dir, ipopt_paths, make  # noqa: F401  (casadi_dir: the export API)
 from .folder import MANIFEST, claim_folder, digest, manifest
 from .functions import CHECK_FAILURES, generate
@@ -103,7 +103,7 @@ def write_params(path: str | Path, tr: Transcription, p: np.ndarray, header: str
 
 @dataclass(frozen=True)
 class Export:
-    """What ``export_c`` wrote, and the compiled Solver it was exported from."""
+    """What ``export_c`` wrote, and the compiled CompiledProblem it was exported from."""
 
     folder: Path
     problem: str
@@ -113,7 +113,7 @@ class Export:
     n_g: int  # constraints
     n_values: int  # numbers of a parameter file
     binary: Path | None  # DIR/solve when built
-    solver: Solver
+    solver: CompiledProblem
 
 
 def _c_string(s: str) -> str:
@@ -303,7 +303,7 @@ def _write_all(folder: Path, files: dict[str, str | bytes]) -> None:
     record({**{k: v for k, v in old.items() if k not in new}, **new})
 
 
-def export_c(problem: Problem | Solver, folder: str | Path, N: int | None = None,
+def export_c(problem: Problem | CompiledProblem, folder: str | Path, N: int | None = None,
              retraction: str | None = None, rule: str | None = None,
              ipopt: dict[str, Any] | None = None, build: bool = False,
              ipopt_lib: str | Path | None = None, ipopt_include: str | Path | None = None,
@@ -315,9 +315,9 @@ def export_c(problem: Problem | Solver, folder: str | Path, N: int | None = None
     """Write ``problem`` compiled with ``method`` (N intervals, scheme, retraction, rule)
     and ``options`` (backend, IPOPT's options, ``max_seconds``) as a C project in
     ``folder``; the keywords N to max_seconds replace their fields, as in
-    :func:`~ocgroupoid.solve.entry.compile` (the exported solver is C of its own: no jit).
+    :func:`~ocgroupoid.solve.entry.compile_problem` (the exported solver is C of its own: no jit).
 
-    ``problem`` may also be a compiled :class:`Solver` (its N, scheme, retraction, rule and
+    ``problem`` may also be a compiled :class:`CompiledProblem` (its N, scheme, retraction, rule and
     IPOPT options are kept). IPOPT's own printing is switched off (``print_level 0``) in a
     problem compiled here: the driver's stdout carries the solution JSON only.
     ``ipopt_lib``/``ipopt_include`` default to the libipopt and headers inside the casadi
@@ -339,21 +339,21 @@ def export_c(problem: Problem | Solver, folder: str | Path, N: int | None = None
     method, options = choose(method, options, N=N, retraction=retraction, rule=rule,
                              ipopt=ipopt, scheme=scheme, steps=steps, backend=backend,
                              max_seconds=max_seconds)
-    if method.steps == "adaptive" or (isinstance(problem, Solver)
+    if method.steps == "adaptive" or (isinstance(problem, CompiledProblem)
                                       and problem.disc.steps == "adaptive"):
         raise ConfigError("adaptive steps come from a second, phased solve placed on the "
                           "switches of a first one, which the exported solver does not run; "
                           "export with uniform steps (--set discretization.steps=uniform)")
-    if not isinstance(problem, (Solver, Problem)):
-        raise ConfigError(f"export_c takes a Problem or a compiled Solver, got "
+    if not isinstance(problem, (CompiledProblem, Problem)):
+        raise ConfigError(f"export_c takes a Problem or a compiled CompiledProblem, got "
                           f"{type(problem).__name__}")
     check_prefix(prefix)
     folder = claim_folder(folder, force)
     lib, include = ipopt_paths(ipopt_lib, ipopt_include)
-    if isinstance(problem, Solver):
+    if isinstance(problem, CompiledProblem):
         solver = problem
     else:
-        solver = Solver(problem, method, replace(
+        solver = CompiledProblem(problem, method, replace(
             options, ipopt={**options.ipopt, **EXPORT_IPOPT}, jit=False))
     tr = solver.transcription
     p = tr.pack()

@@ -10,7 +10,7 @@ or fatrop on the stage form: ``solver.backend``) with the bounds computed from p
 primal); ``{prefix}gen_guess(p) -> x0`` the first geodesic guess; ``{prefix}gen_pack(values)
 -> (p, bad)`` the packing of a parameter file's numbers; ``{prefix}gen_post(x, p, lam_g)`` the
 read-out a Solution is made of; ``{prefix}gen_verify(x, p, lam_g) -> (ratios, figures)`` the
-verdict's checks (:mod:`~ocgroupoid.solve.verify_graph`).
+verdict's checks (:mod:`~ocgroupoid.verify.graph`).
 """
 
 from __future__ import annotations
@@ -24,9 +24,9 @@ import casadi as ca
 
 from ..nlp.program import C_READOUT_OUTPUTS
 from ..nlp.transcription import Transcription
-from ..solve.diagnostics import replay_of
-from ..solve.verdict import REPLAY_TOLERANCE, check_tolerance
-from ..solve.verify_graph import verify_function
+from ..verify.diagnostics import replay_of
+from ..verify.graph import verify_function
+from ..verify.verdict import REPLAY_TOLERANCE, check_tolerance
 
 #: outputs of the generated solvers ({prefix}gen_nlpsol, {prefix}gen_nlpsol_warm)
 SOLVE_OUTPUTS = ("x", "f", "g", "lam_g", "lam_x")

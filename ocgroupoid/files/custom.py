@@ -48,7 +48,7 @@ from ..groupoid.base import Factor
 from ..lie import SE2, SE3, SO3
 from ..model.problem import Problem
 from ..model.values import Strict, check_vector, vector
-from ..models.registry import ModelSpec
+from ..systems.registry import ModelSpec
 from .described import Described, UnitText
 from .expressions import CONSTANTS, FUNCTIONS, compile_expression
 

@@ -20,7 +20,7 @@ expressions: ``theta: [pi]``, ``angle: pi/2``. Every number lies within the scal
 precision resolves (:mod:`~ocgroupoid.files.scale`). What the machine can take is checked too
 (:mod:`~ocgroupoid.files.limits`): N within a memory estimate, an installed linear solver.
 ``horizon.N: auto`` with ``solver.accuracy`` (or ``solver.replay_accuracy``) leaves N to the
-search of :mod:`~ocgroupoid.solve.auto` (its keys checked together by :func:`check_auto`).
+search of :mod:`~ocgroupoid.solve.accuracy` (its keys checked together by :func:`check_auto`).
 """
 
 from __future__ import annotations
@@ -35,9 +35,9 @@ from pydantic import BaseModel
 
 from ..errors import ConfigError
 from ..model.problem import Problem
-from ..models import MODELS
-from ..models.registry import ModelSpec
 from ..nlp.schemes import SCHEME_NAMES
+from ..systems import MODELS
+from ..systems.registry import ModelSpec
 from . import bounds, limits
 from .custom import Definition, spec as custom_spec
 from .expressions import CONSTANTS, FUNCTIONS, compile_expression
@@ -116,7 +116,7 @@ CONSTANT_SECTIONS = ("parameters", "initial", "final")  # numbers may be written
 
 
 def check_auto(top: ProblemFile, locate: Locator) -> None:
-    """The keys of ``horizon.N: auto`` (:mod:`~ocgroupoid.solve.auto`) go together: it needs
+    """The keys of ``horizon.N: auto`` (:mod:`~ocgroupoid.solve.accuracy`) go together: it needs
     a target (``solver.accuracy`` or ``solver.replay_accuracy``), the targets and
     ``scheme: auto`` need it, and it replaces ``solver.continuation`` and adaptive steps."""
     s, d = top.solver, top.discretization

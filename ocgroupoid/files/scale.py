@@ -14,7 +14,7 @@ from typing import Any, Iterator
 
 from ..errors import ConfigError
 from ..model.ranges import POSITIVE_RANGE, SIGNED_RANGE, Range, positive_parameters
-from ..models.registry import ModelSpec
+from ..systems.registry import ModelSpec
 from .source import Locator
 
 

@@ -1,7 +1,7 @@
 """The top-level sections of a problem file, as pydantic models (unknown keys are errors).
 
 The model-specific sections (``parameters``, ``initial``, ``final``) are each model's own
-schemas (:class:`~ocgroupoid.models.registry.ModelSpec`).
+schemas (:class:`~ocgroupoid.systems.registry.ModelSpec`).
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from ..model.values import Strict, number, positive
 from ..nlp.method import DEFAULT_RETRACTION, DEFAULT_STEPS, MAX_BOUND_POINTS, STEPS
 from ..nlp.options import BACKENDS, DEFAULT_BACKEND, MAX_SECONDS
 from ..nlp.schemes import DEFAULT_RULE, SCHEME_NAMES
-from ..solve.auto import ACCURACY_MAX, N_MAX, N_MIN
+from ..solve.accuracy import ACCURACY_MAX, N_MAX, N_MIN
 
 #: the scheme of a problem file that names none (with a fixed N): order4 lands within 1e-6
 #: of the distance at the files' N where order2 needs 4N or more (scripts/bench_default_scheme.py)
@@ -77,7 +77,7 @@ def _intervals(v: Any) -> Any:
 
 
 def _accuracy(v: Any) -> float:
-    """A relative error in (0, :data:`~ocgroupoid.solve.auto.ACCURACY_MAX`]."""
+    """A relative error in (0, :data:`~ocgroupoid.solve.accuracy.ACCURACY_MAX`]."""
     x = number(v, "accuracy")
     if not 0 < x <= ACCURACY_MAX:
         raise ValueError(f"accuracy = {x:g} is outside (0, {ACCURACY_MAX:g}]: it is the "

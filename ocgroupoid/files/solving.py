@@ -3,7 +3,7 @@
 
 The sections are validated as the file is loaded (:mod:`~ocgroupoid.files.schema`); the
 objects validate the same values again, so a file and a script that say the same thing
-build the same solver: ``og.compile(*files.build_all(cfg))``.
+build the same solver: ``og.compile_problem(*files.build_all(cfg))``.
 """
 
 from __future__ import annotations
@@ -12,14 +12,14 @@ from ..errors import ConfigError
 from ..model.problem import Problem
 from ..nlp.method import Method
 from ..nlp.options import SolverOptions
-from ..solve.auto import AUTO_SCHEMES
+from ..solve.accuracy import AUTO_SCHEMES
 from .load import Config, build
 
 
 def method(cfg: Config) -> Method:
     """The method of a problem file: ``horizon.N`` and the ``discretization`` section. With
     ``horizon.N: auto``, the first grid of the search (``horizon.N_min``) and, with
-    ``scheme: auto``, the first scheme it tries (:data:`~ocgroupoid.solve.auto.AUTO_SCHEMES`)."""
+    ``scheme: auto``, the first scheme it tries (:data:`~ocgroupoid.solve.accuracy.AUTO_SCHEMES`)."""
     f = cfg.file
     d = f.discretization
     N = f.horizon.grids[0] if f.horizon.N == "auto" else f.horizon.N
@@ -33,7 +33,7 @@ def method(cfg: Config) -> Method:
 
 def options(cfg: Config) -> SolverOptions:
     """The solver options of a problem file: its ``solver`` section (the accuracy targets of
-    ``horizon.N: auto`` are the search's, :func:`~ocgroupoid.solve.auto.solve_to_accuracy`)."""
+    ``horizon.N: auto`` are the search's, :func:`~ocgroupoid.solve.accuracy.solve_to_accuracy`)."""
     s = cfg.file.solver
     try:
         return SolverOptions(backend=s.backend, ipopt=dict(s.ipopt), jit=s.jit,

@@ -4,7 +4,7 @@ constraints and boundary values, and the Euler-Lagrange operator derived from it
 ``model`` (singular) is the modelling *language*: :class:`Problem` and what it is written
 with — declarations, statement, boundary values, labels, mechanics. The *models* written in
 it, the canonical systems a problem file names with ``model:``, are in
-:mod:`ocgroupoid.models` (plural), one layer up.
+:mod:`ocgroupoid.systems` (plural), one layer up.
 """
 
 from .mechanics import Mechanics, euler_lagrange, split

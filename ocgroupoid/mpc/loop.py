@@ -49,9 +49,9 @@ from ..nlp.method import DEFAULT_RETRACTION, Method
 from ..nlp.options import DEFAULT_BACKEND, SolverOptions
 from ..nlp.schemes import DEFAULT_RULE, DEFAULT_SCHEME
 from ..nlp.transcription import Transcription
+from ..solve.compiled import CompiledProblem
 from ..solve.readout import control_ppoly
-from ..solve.replay import terminal_errors
-from ..solve.solver import Solver
+from ..verify.replay import terminal_errors
 from .controller import Converged, Outcome, RealTime
 from .plant import Plant, mismatched
 from .report import HOLD, MpcResult, Step
@@ -127,7 +127,7 @@ def mpc(problem: Problem, N: int = 32, steps: int | None = None, *, rti: bool = 
     K = steps if steps is not None else (N if horizon == "shrinking" else 2 * N)
     _check(K, N, horizon, problem.T_free, sample, min_horizon)
     mismatch = dict(mismatch or {})
-    solver = Solver(problem, Method(N, scheme=scheme, retraction=retraction, rule=rule),
+    solver = CompiledProblem(problem, Method(N, scheme=scheme, retraction=retraction, rule=rule),
                     SolverOptions(backend=backend, ipopt=dict(ipopt or {})))
     tr = solver.transcription
     p = tr.pack()

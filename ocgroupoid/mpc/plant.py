@@ -2,7 +2,7 @@
 
 The continuous controlled Euler-Lagrange(-Poincaré) equations of the problem
 (:class:`~ocgroupoid.nlp.dynamics.Dynamics`, the right-hand side the replay of every solution
-integrates, :mod:`~ocgroupoid.solve.replay`) are integrated by classical RK4
+integrates, :mod:`~ocgroupoid.verify.replay`) are integrated by classical RK4
 (:func:`~ocgroupoid.nlp.dynamics.rk4`) with :data:`SUBSTEPS` substeps per piece of the applied
 control polynomial, with the plant's own parameters (the model's, some scaled: a mismatch such
 as inertia x 1.05). After each sample the velocities receive process noise: independent

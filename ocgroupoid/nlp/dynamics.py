@@ -8,7 +8,7 @@ accelerations: ``dy/dt = u``; first-order problems whose controls are velocity c
 the constraints ``psi(q, y) = 0`` solved for the remaining velocities. States follow the
 reconstruction equations (``G.state_rate``: ``dR/dt = R hat(Omega)``, ...).
 
-The replay (:mod:`ocgroupoid.solve.replay`) integrates it; the shooting baselines
+The replay (:mod:`ocgroupoid.verify.replay`) integrates it; the shooting baselines
 (:mod:`ocgroupoid.nlp.schemes.shooting`) discretise it. Any other problem has no continuous
 dynamics, and :attr:`Dynamics.reason` says why. :func:`rk4` is the one classical Runge-Kutta
 step they all take (the replay, the shooting baselines, the simulator's comparison).

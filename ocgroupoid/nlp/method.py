@@ -5,7 +5,7 @@ scheme="order4")``. It is validated once, when it is made, and passed whole to e
 that builds an NLP. Every default of a discretisation is here (the scheme's and the rule's
 are the schemes' own, :mod:`~ocgroupoid.nlp.schemes`).
 :class:`Discretization` is a method with the phases of adaptive steps, which the solver
-places itself (:mod:`~ocgroupoid.solve.mesh`).
+places itself (:mod:`~ocgroupoid.nlp.mesh`).
 """
 
 from __future__ import annotations
@@ -75,12 +75,12 @@ class Discretization(Method):
     """A method with adaptive steps placed: ``phases`` (interval counts summing to N),
     uniform within each phase, the phases' durations free (seed 001, §6.3: time as a variable
     of the discrete problem). The solver chooses the phases so that phase boundaries — nodes
-    — fall on the switches of the controls (:mod:`ocgroupoid.solve.mesh`)."""
+    — fall on the switches of the controls (:mod:`ocgroupoid.nlp.mesh`)."""
 
     phases: tuple[int, ...] = ()
     #: adaptive steps: per phase, per bound row, the side held throughout the phase (+1 upper,
     #: -1 lower, 0 none): a bang-bang arc as an equality, so that the phases' durations are
-    #: the switching times (:mod:`ocgroupoid.solve.mesh`)
+    #: the switching times (:mod:`ocgroupoid.nlp.mesh`)
     active: tuple[tuple[int, ...], ...] = ()
 
     def __post_init__(self) -> None:

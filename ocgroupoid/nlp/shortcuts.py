@@ -1,10 +1,10 @@
-"""The keyword shortcuts of ``og.solve``/``og.compile`` turned into the two objects, in one
+"""The keyword shortcuts of ``og.solve``/``og.compile_problem`` turned into the two objects, in one
 place.
 
 ``og.solve(problem, N=16, scheme="order4", jit=True)`` reads as
 ``og.solve(problem, og.Method(N=16, scheme="order4"), og.SolverOptions(jit=True))``;
-keywords given beside an object replace its fields (``og.compile(problem, method, N=32)``).
-The positional form of older code, ``compile(problem, N, retraction, rule, ipopt, scheme,
+keywords given beside an object replace its fields (``og.compile_problem(problem, method, N=32)``).
+The positional form of older code, ``compile_problem(problem, N, retraction, rule, ipopt, scheme,
 steps, jit, backend, max_seconds)``, is read here too.
 """
 

@@ -14,7 +14,7 @@ A condition redundant only on the feasible set (implied through a conservation l
 reaction-wheel slew with zero total momentum and both ``Omega(T)`` and ``dphi(T)``
 prescribed) is invisible at a generic point; when the generic test finds nothing, the small
 grid is solved (one start, at most :data:`SMALL_ITER` iterations, tens of ms) and the rank
-test of :mod:`~ocgroupoid.solve.dependencies` runs at the point reached.
+test of :mod:`~ocgroupoid.verify.dependencies` runs at the point reached.
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ from ..nlp.method import Method
 from ..nlp.options import SolverOptions
 from ..nlp.shortcuts import choose
 from ..nlp.transcription import Transcription
-from .dependencies import dependent_conditions
+from ..verify.dependencies import dependent_conditions
 from .guesses import geodesic_guesses, perturbed_guesses
 
 SMALL_N = 8
@@ -121,7 +121,7 @@ def check(problem: Problem, method: Method | int | None = None,
           options: SolverOptions | str | None = None, *positional: Any,
           **keywords: Any) -> CheckReport:
     """Build the NLP with ``method`` (dimensions) and at a small N (redundancy test);
-    ``method`` and ``options`` as in :func:`~ocgroupoid.solve.entry.compile`, of which the
+    ``method`` and ``options`` as in :func:`~ocgroupoid.solve.entry.compile_problem`, of which the
     test reads the IPOPT options (it builds IPOPT, without jit)."""
     method, options = choose(method, options, *positional, **keywords)
     # the one solve (implied_conditions) stops early

@@ -1,4 +1,4 @@
-"""The two calls of the API: ``compile`` a problem with a method and solver options, and
+"""The two calls of the API: ``compile_problem`` a problem with a method and solver options, and
 ``solve`` it in one go.
 
 >>> method = og.Method(N=64, scheme="order4")                         # doctest: +SKIP
@@ -16,27 +16,27 @@ from typing import Any
 from ..model.problem import Problem
 from ..nlp.method import METHOD_KEYS, Method
 from ..nlp.options import OPTION_KEYS, SolverOptions
+from .compiled import CompiledProblem
 from .solution import Solution
-from .solver import Solver
 
 
-def compile(problem: Problem, method: Method | int | None = None,
+def compile_problem(problem: Problem, method: Method | int | None = None,
             options: SolverOptions | str | None = None, *positional: Any,
-            **keywords: Any) -> Solver:
+            **keywords: Any) -> CompiledProblem:
     """Build the NLP of ``problem`` once with ``method`` (N intervals, scheme, retraction,
     rule, uniform or adaptive steps, bound points) and ``options`` (backend, IPOPT's options,
     compiled evaluation ``jit``, the wall time ``max_seconds`` of one solve, multi-start and
-    continuation); see :class:`Solver`. Keywords replace fields of either
-    (``compile(problem, N=64, backend="fatrop")``)."""
-    return Solver(problem, method, options, *positional, **keywords)
+    continuation); see :class:`CompiledProblem`. Keywords replace fields of either
+    (``compile_problem(problem, N=64, backend="fatrop")``)."""
+    return CompiledProblem(problem, method, options, *positional, **keywords)
 
 
 def solve(problem: Problem, method: Method | int | None = None,
           options: SolverOptions | str | None = None, *positional: Any,
           **keywords: Any) -> Solution:
     """Build and solve in one call: the keywords of a method or of the options as in
-    :func:`compile`, the others (``params``, ``initial``, ``final``, ``T``, ``guess``, ...)
-    go to :meth:`Solver.solve`."""
+    :func:`compile_problem`, the others (``params``, ``initial``, ``final``, ``T``, ``guess``, ...)
+    go to :meth:`CompiledProblem.solve`."""
     ours = {k: v for k, v in keywords.items() if k in METHOD_KEYS or k in OPTION_KEYS}
     rest = {k: v for k, v in keywords.items() if k not in ours}
-    return compile(problem, method, options, *positional, **ours).solve(**rest)
+    return compile_problem(problem, method, options, *positional, **ours).solve(**rest)

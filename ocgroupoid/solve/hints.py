@@ -6,7 +6,7 @@ import casadi as ca
 import numpy as np
 
 from ..nlp.transcription import RawResult, Transcription
-from .dependencies import dependent_conditions
+from ..verify.dependencies import dependent_conditions
 
 HINTS = {
     "Infeasible_Problem_Detected": "the constraints and boundary conditions look incompatible "

@@ -17,17 +17,17 @@ import numpy as np
 
 from ..nlp.assembly import Kind
 from ..nlp.transcription import RawResult, Transcription
-from .diagnostics import diagnose
+from ..verify.diagnostics import diagnose
+from ..verify.verdict import REPLAY_TOLERANCE, check_tolerance, tolerances, verdict
 from .hints import hint_for
 from .solution import Solution
-from .verdict import REPLAY_TOLERANCE, check_tolerance, tolerances, verdict
 
 
 def make_solution(tr: Transcription, r: RawResult, minima: Sequence[Any],
                   replay: bool = True, ipopt: dict[str, Any] | None = None,
                   replay_tolerance: float = REPLAY_TOLERANCE) -> Solution:
     """Assemble a Solution (trajectory, controls, multipliers, diagnostics) from a result;
-    ``success`` is the :mod:`~ocgroupoid.solve.verdict` (``ipopt``: the options solved with)."""
+    ``success`` is the :mod:`~ocgroupoid.verify.verdict` (``ipopt``: the options solved with)."""
     pb, G = tr.problem, tr.problem.groupoid
     t0 = time.perf_counter()
     g_nlp = np.array(tr.g_fun(r.x, r.p)).ravel()

@@ -75,7 +75,7 @@ class Solution:
     x: np.ndarray = field(default_factory=lambda: np.zeros(0))
     p: np.ndarray = field(default_factory=lambda: np.zeros(0))
     #: IPOPT's multipliers of the constraints g and of the variable bounds: with x, the
-    #: primal-dual point a re-solve warm-starts from (``Solver.solve(warm=solution)``)
+    #: primal-dual point a re-solve warm-starts from (``CompiledProblem.solve(warm=solution)``)
     lam_g: np.ndarray = field(default_factory=lambda: np.zeros(0))
     lam_x: np.ndarray = field(default_factory=lambda: np.zeros(0))
     #: the manifold of every state (``SO(3)``, ``SE(3)``, ``S^2``, ``R^2``, ...)

@@ -2,7 +2,7 @@
 
 A worker process keeps the last few compiled Solvers by structure key, so a chunk builds
 the NLP only if this process has not built it already; every point is solved through
-``Solver.solve(params, initial, final, T)`` with its own values, which never rebuilds.
+``CompiledProblem.solve(params, initial, final, T)`` with its own values, which never rebuilds.
 
 Warm starts (``warm``): the points of a chunk are solved in sweep order, and a point whose
 grid neighbour (one step back or forward along one axis, same random sample) was solved
@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Any, Literal
 from ..errors import BoundaryError, ConfigError
 from ..model.problem import Problem
 from ..nlp import Guess
-from ..solve import Solution, Solver, compile, interpolate
+from ..solve import CompiledProblem, Solution, compile_problem, interpolate
 from . import record
 from .source import Source
 from .spec import Point
@@ -37,7 +37,7 @@ Warm = Literal["fallback", "first", "off"]
 WARM_MODES: tuple[str, ...] = ("fallback", "first", "off")
 #: compiled NLPs a worker process keeps (a sweep over N holds one per N)
 CACHE_SIZE = 4
-_solvers: OrderedDict[str, Solver] = OrderedDict()
+_solvers: OrderedDict[str, CompiledProblem] = OrderedDict()
 
 
 @dataclass(frozen=True)
@@ -61,7 +61,7 @@ class Outcome:
 
 
 def arguments(pb: Problem) -> dict[str, Any]:
-    """The :meth:`Solver.solve` arguments that make an NLP of the same structure solve
+    """The :meth:`CompiledProblem.solve` arguments that make an NLP of the same structure solve
     ``pb``: its parameters, prescribed boundary values and T (free quantities left out)."""
     def given(*parts: dict[str, Any]) -> dict[str, Any]:
         return {k: v for part in parts for k, v in part.items() if v is not None}
@@ -71,7 +71,7 @@ def arguments(pb: Problem) -> dict[str, Any]:
             "final": given(pb.end.states, pb.end.velocities), "T": pb.T}
 
 
-def _fits(solver: Solver, args: dict[str, Any]) -> bool:
+def _fits(solver: CompiledProblem, args: dict[str, Any]) -> bool:
     """Whether the point's boundary values prescribe the same components as the NLP's."""
     try:
         solver.transcription.pack(**args)
@@ -81,7 +81,7 @@ def _fits(solver: Solver, args: dict[str, Any]) -> bool:
 
 
 def solver_for(structure: str, pb: Problem, cfg: Config, args: dict[str, Any]
-               ) -> tuple[Solver, bool]:
+               ) -> tuple[CompiledProblem, bool]:
     """This process's compiled NLP of ``structure``, or a new one; and whether it was built.
 
     A BoundaryError from packing the point's values (a structure key that missed a change
@@ -98,7 +98,7 @@ def solver_for(structure: str, pb: Problem, cfg: Config, args: dict[str, Any]
     from ..files.solving import method, options
 
     # the file's method and options; multi-start and continuation are each attempt's own
-    solver = compile(pb, method(cfg), replace(options(cfg), multistart=False, continuation=()))
+    solver = compile_problem(pb, method(cfg), replace(options(cfg), multistart=False, continuation=()))
     _solvers[structure] = solver
     _solvers.move_to_end(structure)
     while len(_solvers) > CACHE_SIZE:
@@ -147,7 +147,7 @@ def solve_point(task: Task, point: Point, near: tuple[str, Solution] | None
     return record.solved(point, sol, built, warm, time.perf_counter() - t0), sol
 
 
-def _attempts(solver: Solver, cfg: Config, args: dict[str, Any],
+def _attempts(solver: CompiledProblem, cfg: Config, args: dict[str, Any],
               near: tuple[str, Solution] | None, mode: Warm) -> tuple[Solution, bool]:
     """Solve in the order ``mode`` asks; the first success, else the first attempt's result,
     and whether the result came from the neighbour."""

@@ -45,7 +45,7 @@ FAILED = "Fatrop_Failed"
 #: by IPOPT's name for the same outcome; CasADi counts only flag 0 as success, so a stop at
 #: an acceptable point (flag 2: the error below ``tol_acceptable`` for ``acceptable_iter``
 #: iterations, not below ``tol``) is not one, as IPOPT's is not for the verdict
-#: (:mod:`~ocgroupoid.solve.verdict`) and the policy runs IPOPT after it
+#: (:mod:`~ocgroupoid.verify.verdict`) and the policy runs IPOPT after it
 STATUS = {0: "Solve_Succeeded", 1: "Maximum_Iterations_Exceeded",
           2: "Solved_To_Acceptable_Level", 3: "Infeasible_Problem_Detected"}
 #: fatrop relaxes every inequality bound by this factor, as IPOPT's default

@@ -1,12 +1,12 @@
 """The verdict's checks as one CasADi Function, for the exported C solver.
 
-``verify(x, p, lam_g) -> (ratios, figures)``: what :mod:`~ocgroupoid.solve.verdict` checks
+``verify(x, p, lam_g) -> (ratios, figures)``: what :mod:`~ocgroupoid.verify.verdict` checks
 of a solution that a compiled program can check too, each as a ratio to its tolerance (a
 check passes when its ratio is at most 1):
 
 * ``residual``: the largest equality residual and bound violation at the points where the
-  bounds are imposed, over :func:`~ocgroupoid.solve.verdict.check_tolerance`;
-* ``landing``: the largest miss of the replayed plan (:mod:`~ocgroupoid.solve.replay`, RK4
+  bounds are imposed, over :func:`~ocgroupoid.verify.verdict.check_tolerance`;
+* ``landing``: the largest miss of the replayed plan (:mod:`~ocgroupoid.verify.replay`, RK4
   with a fixed number of substeps per piece) over its landing tolerance;
 * ``bounds``: the largest bound violation along the replay over its tolerance;
 * ``constraints``: for a plan driven by its velocities, the constraints along the replay;
@@ -117,7 +117,7 @@ def _rowmax(A: ca.MX) -> ca.MX:
 
 
 def _velocity_coefficients(tv: ca.MX, V: ca.MX, t: ca.MX, N: int) -> ca.MX:
-    """:func:`~ocgroupoid.solve.replay.velocity_ppoly` as a graph: per interval a constant
+    """:func:`~ocgroupoid.verify.replay.velocity_ppoly` as a graph: per interval a constant
     (one sample) or the line through its two samples; rows ``power * m + component``."""
     k = tv.size2() // N
     if k == 1:
@@ -133,7 +133,7 @@ def _velocity_coefficients(tv: ca.MX, V: ca.MX, t: ca.MX, N: int) -> ca.MX:
 def _landing(tr: Transcription, states: ca.MX, velocities: ca.MX, steps: ca.MX, s: ca.MX,
              y: ca.MX | None, p: ca.MX) -> tuple[ca.MX, ca.MX]:
     """The replay's misses of the prescribed final values and the distances they are
-    measured against (:func:`~ocgroupoid.solve.verdict.scales`), as graphs."""
+    measured against (:func:`~ocgroupoid.verify.verdict.scales`), as graphs."""
     G, m = tr.problem.groupoid, tr.masks
     target = p[tr.layout.p_slices["end"]]
     errors: list[ca.MX] = []

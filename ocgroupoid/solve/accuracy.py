@@ -7,7 +7,7 @@ coarse for the motion is no seed), and stops at the first grid whose solution is
 and meets the targets:
 
 * ``accuracy``: the relative cost error, estimated by Richardson from this grid and the
-  previous one (:mod:`~ocgroupoid.solve.richardson`), ``|J_N - J_N/2| / (2^p - 1) / |J_N|``.
+  previous one (:mod:`~ocgroupoid.verify.richardson`), ``|J_N - J_N/2| / (2^p - 1) / |J_N|``.
   The order p is the scheme's (:attr:`~ocgroupoid.nlp.schemes.base.Scheme.accuracy`), at
   most 2 when bounds are active on uniform steps (a switch inside an interval), lowered to
   the order observed, so that a grid outside the asymptotic regime is never
@@ -40,11 +40,11 @@ from ..nlp.method import Method
 from ..nlp.options import SolverOptions
 from ..nlp.schemes import SCHEME_NAMES
 from ..nlp.shortcuts import choose
-from .diagnostics import replay_of
+from ..verify.diagnostics import replay_of
+from ..verify.richardson import estimate as richardson_estimate, observed_order
+from .compiled import CompiledProblem, Progress
 from .guesses import interpolate
-from .richardson import estimate as richardson_estimate, observed_order
 from .solution import Solution
-from .solver import Progress, Solver
 
 #: the schemes ``scheme="auto"`` tries, in this order
 AUTO_SCHEMES = ("order4", "order2")
@@ -183,12 +183,12 @@ def _estimate(prior: list[Level], sol: Solution, replay_error: float | None, nom
 
 
 def _solve_grid(problem: Problem, scheme: str, N: int, search: Search,
-                seed: tuple[Solver, Solution] | None, progress: Progress
-                ) -> tuple[Solver, Solution]:
+                seed: tuple[CompiledProblem, Solution] | None, progress: Progress
+                ) -> tuple[CompiledProblem, Solution]:
     """One grid: from ``seed`` (the last verified grid, interpolated), or with the
     multi-start when there is none."""
     progress(f"{scheme}, N={N}: building the NLP")
-    solver = Solver(problem, replace(search.method, N=N, scheme=scheme), search.options)
+    solver = CompiledProblem(problem, replace(search.method, N=N, scheme=scheme), search.options)
     if search.replay_accuracy is not None and replay_of(solver.transcription).rhs is None:
         raise ConfigError(f"replay_accuracy: this problem has no replay "
                           f"({replay_of(solver.transcription).reason}); ask for accuracy "
@@ -208,7 +208,7 @@ def _search(problem: Problem, scheme: str, search: Search, budget: float | None,
     """Double N from ``N_min`` with ``scheme`` until the targets are met, N_max is passed,
     Ctrl-C is pressed or the IPOPT time exceeds ``budget``."""
     run = Run(scheme)
-    seed: tuple[Solver, Solution] | None = None
+    seed: tuple[CompiledProblem, Solution] | None = None
     N = search.N_min
     while N <= search.N_max:
         t0 = time.perf_counter()
@@ -294,7 +294,7 @@ def solve_to_accuracy(problem: Problem, accuracy: float | None = None,
                       ) -> Solution:
     """Solve on the smallest grid N = N_min 2^k whose estimated error meets ``accuracy``
     (relative cost error) and/or ``replay_accuracy`` (the replay's terminal error); see the
-    module docstring. ``method`` and ``options`` as in :func:`compile` (the method's N is
+    module docstring. ``method`` and ``options`` as in :func:`compile_problem` (the method's N is
     the search's, its scheme too unless ``scheme`` is given: one of the schemes, or
     ``auto``); the other keywords replace their fields (``multistart``, ``jit``,
     ``backend``, ``max_seconds`` of each grid's solve, ...). ``progress`` hears what runs (a

@@ -17,6 +17,7 @@ import numpy as np
 
 from ..errors import ConfigError
 from ..model.problem import Problem
+from ..nlp import mesh
 from ..nlp.backends import TIMED_OUT
 from ..nlp.method import Discretization, Method
 from ..nlp.options import SolverOptions
@@ -24,13 +25,13 @@ from ..nlp.program import Guess
 from ..nlp.shortcuts import choose
 from ..nlp.transcription import RawResult, Transcription
 from ..nlp.watch import Listener
-from . import mesh, richardson
-from .diagnostics import replay_of
+from ..verify import richardson
+from ..verify.diagnostics import replay_of
+from ..verify.verdict import REPLAY_TOLERANCE, scales
 from .guesses import as_guess, geodesic_guesses, interpolate, model_guesses, perturbed_guesses
 from .interrupt import Interrupt, interruptible
 from .readout import control_ppoly, make_solution
 from .solution import Solution
-from .verdict import REPLAY_TOLERANCE, scales
 
 Progress = Callable[[str], None]
 #: a further start of a multi-start gets max(a, b x the first start's) iterations: one that
@@ -89,12 +90,12 @@ def distinct_minima(results: Iterable[RawResult], rtol: float = 1e-6, xtol: floa
     return [m for m, _ in found]
 
 
-class Solver:
+class CompiledProblem:
     """A compiled problem: build once, solve for any parameters, boundary values and T.
 
-    ``Solver(problem, method, options)`` with an :class:`~ocgroupoid.nlp.method.Method` and
+    ``CompiledProblem(problem, method, options)`` with an :class:`~ocgroupoid.nlp.method.Method` and
     :class:`~ocgroupoid.nlp.options.SolverOptions` (default: every default), their fields
-    replaceable by keywords (``Solver(problem, N=32, backend="fatrop")``,
+    replaceable by keywords (``CompiledProblem(problem, N=32, backend="fatrop")``,
     :func:`~ocgroupoid.nlp.shortcuts.choose`).
 
     ``max_seconds`` bounds the wall time of one :meth:`solve` (every start and grid): a start
@@ -102,7 +103,7 @@ class Solver:
     :mod:`~ocgroupoid.nlp.isolated`) with status ``Maximum_WallTime_Exceeded``, the starts
     left are skipped, and the best point so far is returned.
 
-    >>> solver = compile(problem, N=64)                    # doctest: +SKIP
+    >>> solver = compile_problem(problem, N=64)                    # doctest: +SKIP
     >>> sol = solver.solve(params={"inertia": [2, 1, 1]})  # doctest: +SKIP
     """
 
@@ -143,7 +144,7 @@ class Solver:
               replay_tolerance: float = REPLAY_TOLERANCE, warm: Solution | None = None
               ) -> Solution:
         """Solve with IPOPT and return a diagnosed Solution; ``success`` is the
-        :mod:`~ocgroupoid.solve.verdict` (IPOPT converged and the solution checked out).
+        :mod:`~ocgroupoid.verify.verdict` (IPOPT converged and the solution checked out).
 
         ``multistart``: True (every geodesic guess, the model's guesses and 3 perturbations;
         a further start gets :data:`START_BUDGET` iterations; the default of problem files
@@ -288,7 +289,7 @@ class Solver:
                initial: dict[str, Any] | None, final: dict[str, Any] | None,
                progress: Progress) -> tuple[Transcription, RawResult, dict[str, Any]]:
         """Adaptive steps: the phases between the switches of the uniform solution r
-        (:mod:`ocgroupoid.solve.mesh`), their durations solved for. The phased solution is
+        (:mod:`ocgroupoid.nlp.mesh`), their durations solved for. The phased solution is
         kept only when it solved and its plan lands at least as well as the uniform one's
         (driven through the continuous problem: a mesh that stretches an arc over a few long
         steps can shorten the discrete T below the optimum, and the replay shows it);

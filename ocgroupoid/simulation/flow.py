@@ -11,7 +11,7 @@ xi_{k-1}); then ``s_{k+1} = step(s_k, tau(h xi_k))``. The first node uses the gh
 ``xi_{-1} = 2 V_0 - xi_0``, so that the node velocities ``y_k = (xi_{k-1} + xi_k)/2`` start
 at V_0. One step is a CasADi Function run by ``Function.mapaccum`` in chunks of
 :data:`CHUNK` steps (:func:`accumulate`, shared with the RK4 comparison of
-:mod:`~ocgroupoid.solve.simulate`); a failed Newton solve is reported after its chunk.
+:mod:`~ocgroupoid.simulation.simulate`); a failed Newton solve is reported after its chunk.
 """
 
 from __future__ import annotations

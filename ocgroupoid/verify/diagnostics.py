@@ -8,7 +8,7 @@
 (b) Distance of every node state from its manifold (|R^T R - I|, ||Gamma| - 1|).
 (c) Boundary residuals (each factor's distance to its target), the largest constraint
     residual, and for bounds the largest violation and where they are active.
-(d) Replay (:mod:`ocgroupoid.solve.replay`): the plan driven through the continuous problem;
+(d) Replay (:mod:`ocgroupoid.verify.replay`): the plan driven through the continuous problem;
     the terminal error against the target, the largest violation of every bound along it
     (on a dense grid: the violation a Solution reports), and the cost recomputed along it.
 (e) An a-posteriori estimate of the cost's error (:func:`estimate`): what the replay's miss
@@ -25,9 +25,9 @@ from weakref import WeakKeyDictionary
 import casadi as ca
 import numpy as np
 
+from ..nlp import mesh
 from ..nlp.assembly import Kind
 from ..nlp.transcription import RawResult, Transcription
-from . import mesh
 from .replay import Replay, terminal_errors
 
 _replays: WeakKeyDictionary[Transcription, Replay] = WeakKeyDictionary()

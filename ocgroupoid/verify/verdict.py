@@ -11,8 +11,8 @@ sentence per failed check in its hint (the CLI exits 1):
    the distance of every state from its manifold, the violation of the bounds at the points
    where the scheme imposes them.
 3. No prescribed condition is implied by the others at the solution
-   (:mod:`~ocgroupoid.solve.dependencies`): LICQ holds.
-4. The plan was checked against the continuous problem (:mod:`~ocgroupoid.solve.replay`):
+   (:mod:`~ocgroupoid.verify.dependencies`): LICQ holds.
+4. The plan was checked against the continuous problem (:mod:`~ocgroupoid.verify.replay`):
    driven through it (the dynamics, the kinematics of its controls, or for a first-order plan
    its velocities through ``g' = g y``), it reaches every prescribed final value to within
    the landing tolerance, ``replay_tolerance`` (default :data:`REPLAY_TOLERANCE`) of the

@@ -1,6 +1,6 @@
 """Forward simulation with the discrete equations: the variational integrator itself.
 
-:class:`~ocgroupoid.solve.flow.DiscreteFlow` steps the discrete controlled Euler-Lagrange
+:class:`~ocgroupoid.simulation.flow.DiscreteFlow` steps the discrete controlled Euler-Lagrange
 equations of a second-order problem (the ``order2`` node stage, seed 000 eq. 27-29) forward.
 With zero control this is the implicit-midpoint Lie-group integrator of the free system:
 states stay on the group to rounding, the energy error at the nodes oscillates at O(h^2)
@@ -14,7 +14,7 @@ For comparison :func:`simulate` also integrates the continuous dynamics
 (``M = dEL/d(dy)``, ``c = EL|_{dy=0}``: :class:`~ocgroupoid.nlp.dynamics.Dynamics`, which
 the replay integrates too) with the classical RK4 method at the same step; its energy drifts
 and its states leave the group. Both integrators run in compiled chunks
-(:func:`~ocgroupoid.solve.flow.accumulate`): 10^5 steps take seconds.
+(:func:`~ocgroupoid.simulation.flow.accumulate`): 10^5 steps take seconds.
 """
 
 from __future__ import annotations
@@ -154,7 +154,7 @@ def simulate(problem: Problem, h: float = 0.01, steps: int = 1000,
     ``initial`` overrides the problem's initial states and velocities by name (every one must
     be given, here or in the problem); ``controls`` are the node controls: None (zero), one
     row (constant) or ``steps + 1`` rows; ``params`` override parameter values. ``retraction``
-    and ``rule`` choose the discretisation as in :func:`~ocgroupoid.solve.compile`.
+    and ``rule`` choose the discretisation as in :func:`~ocgroupoid.solve.compile_problem`.
     ``progress``: a rich bar on stderr (None: once the run has taken :data:`SHOW_AFTER` s).
     Raises :class:`~ocgroupoid.errors.SolverError` when Newton fails at a node (decrease h).
     """
