@@ -25,7 +25,7 @@ from ocgroupoid.nlp.backends import FatropBackend, IpoptBackend, Start
 from ocgroupoid.nlp.method import Method
 from ocgroupoid.nlp.options import SolverOptions
 from ocgroupoid.nlp.program import NonlinearProgram
-from ocgroupoid.solve import compile_problem as compile_problem
+from ocgroupoid.solve import compile_problem
 
 ROOT = Path(__file__).resolve().parent.parent
 PROBLEMS = ROOT / "problems"

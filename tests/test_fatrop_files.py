@@ -16,7 +16,7 @@ import pytest
 
 from ocgroupoid import files
 from ocgroupoid.nlp.backends import Start
-from ocgroupoid.solve import compile_problem as compile_problem
+from ocgroupoid.solve import compile_problem
 
 ROOT = Path(__file__).resolve().parent.parent
 PROBLEMS = sorted((ROOT / "problems").glob("*.yaml"))
