@@ -8,8 +8,10 @@ State the continuous problem with :class:`Problem` on a product of groupoid fact
 ``og.solve(problem, N=64)``).
 
 The package is laid out as its pipeline: ``lie`` -> ``groupoid`` -> ``model`` (problem,
-mechanics) -> ``nlp`` (schemes, layout, assembly, transcription) -> ``solve`` (solver,
-guesses, read-out, diagnostics, solution) -> ``models`` (canonical systems) -> ``files``
+mechanics) -> ``nlp`` (schemes, layout, assembly, transcription) -> ``verify`` (replay, verdict,
+the checks that do not trust the solver) -> ``solve`` (the compiled problem, guesses,
+read-out, solution) and ``simulation`` (the variational integrator run forward) ->
+``systems`` (the canonical systems) -> ``files``
 (YAML), ``export`` (C code), ``plotting`` -> ``sweep``, ``bench``, ``mpc`` -> ``cli`` (see
 docs/explanation/architecture.md).
 """
@@ -17,6 +19,9 @@ docs/explanation/architecture.md).
 from . import _startup  # noqa: F401  (first: Ctrl-C while the command line starts, one line)
 
 # isort: split
+import warnings
+from typing import Any
+
 from . import lie
 from ._version import __version__
 from .errors import (
@@ -35,9 +40,25 @@ from .model import GuessContext, Problem
 from .mpc import MpcResult, mpc
 from .nlp import Discretization, Guess, Method, SolverOptions, Transcription
 from .plotting import plot, view  # registers Solution.plot; matplotlib loads on use
-from .simulation.simulate import Simulation, simulate
+from .simulation import Simulation, simulate
 from .solve import CompiledProblem, Solution, compile_problem, solve, solve_to_accuracy
 from .sweep import sweep  # Dask, pandas and pyarrow are imported when a sweep runs
+
+#: the names of earlier releases, still answered with a DeprecationWarning (:func:`__getattr__`)
+_RENAMED = {"compile": "compile_problem", "Solver": "CompiledProblem"}
+
+
+def __getattr__(name: str) -> Any:
+    """``og.compile`` and ``og.Solver``, the names of earlier releases: the same objects as
+    ``og.compile_problem`` and ``og.CompiledProblem``, with a DeprecationWarning (``compile``
+    shadowed Python's builtin; ``Solver`` was not the IPOPT or fatrop solver but a compiled
+    problem)."""
+    if name in _RENAMED:
+        new = _RENAMED[name]
+        warnings.warn(f"og.{name} is now og.{new} (same arguments); the old name will go",
+                      DeprecationWarning, stacklevel=2)
+        return globals()[new]
+    raise AttributeError(f"module 'ocgroupoid' has no attribute {name!r}")
 
 __all__ = [
     "lie", "so3", "Problem", "GuessContext", "Groupoid", "LieGroupFactor", "Pair",

@@ -1,5 +1,9 @@
 """Per-step time of closed-loop MPC: our converged loop and RTI step against a rockit loop.
 
+The converged loop runs twice: in Python and in exported C (:func:`in_c`: ``DIR/mpc``, the
+same loop on the same generated arithmetic; its step time is the shift, the warm re-solve,
+the read-out and the bound check).
+
 One run each, on the same machine in the same process: so3_rest_to_rest at N = 16, 32, 64
 and the free flyer at N = 32, |u_i| <= 0.45, a receding horizon for N samples with the
 inertia x 1.05 in the plant and velocity kicks of 1e-4 after each sample
@@ -52,6 +56,7 @@ import ocgroupoid as og
 from ocgroupoid import files
 from ocgroupoid.bench.record import write_summary
 from ocgroupoid.bench.script import arguments
+from ocgroupoid.export import export_c
 from ocgroupoid.mpc.report import percentiles
 
 BOUND = 0.45
@@ -199,6 +204,25 @@ def ours(problem: og.Problem, N: int, rti: bool, key: str) -> dict[str, Any]:
             "statuses": dict(Counter(s.status for s in r.warm))}
 
 
+def in_c(problem: og.Problem, N: int, key: str) -> dict[str, Any]:
+    """The converged loop in exported C (``DIR/mpc``, built with the Makefile's -O2): the
+    driver's JSON, its warm steps' times (the same loop as :func:`ours`; its kicks from C's
+    own generator)."""
+    import json
+    import subprocess
+    import tempfile
+
+    with tempfile.TemporaryDirectory(prefix="bench-mpc-") as tmp:
+        done = export_c(problem, Path(tmp) / "c", N=N, build=True, mpc=True)
+        assert done.mpc is not None
+        r = subprocess.run([str(done.mpc), "--steps", str(N), "--noise", str(NOISE),
+                            "--mismatch", f"{key}={MISMATCH}"], capture_output=True, text=True,
+                           timeout=600)
+    s = json.loads(r.stdout)["summary"]
+    return {"step": s["timing"]["step"], "failed_steps": s["failed_steps"],
+            "iterations_mean": s["iterations_mean"]}
+
+
 def main() -> None:
     args = arguments(__doc__.splitlines()[0], ROOT / "results")
     runs = [("so3", 16)] if args.quick else [("so3", 16), ("so3", 32), ("so3", 64),
@@ -210,12 +234,14 @@ def main() -> None:
         key = "inertia" if name == "so3" else "J"
         Console(stderr=True).print(f"{name} N={N} ...")
         row = {"problem": name, "N": N,
-               "converged": ours(pb, N, False, key), "rti": ours(pb, N, True, key),
+               "converged": ours(pb, N, False, key), "c": in_c(pb, N, key),
+               "rti": ours(pb, N, True, key),
                "rockit": rockit_loop(pb, name, N, N, key)}
         rows.append(row)
     table = Table(title="MPC per-step time, ms: median / p99 / max of the warm steps; "
                   "failed steps (mean iterations)")
-    for col in ("problem", "N", "converged (IPOPT warm)", "RTI step (HPIPM)", "RTI feedback",
+    for col in ("problem", "N", "converged (IPOPT warm)", "converged in C (DIR/mpc)",
+                "RTI step (HPIPM)", "RTI feedback",
                 "rockit to_function (IPOPT warm)", "rockit set_initial + solve"):
         table.add_column(col)
 
@@ -226,7 +252,7 @@ def main() -> None:
             f"; {r['failed_steps']} failed{it}"
 
     for r in rows:
-        table.add_row(r["problem"], str(r["N"]), cell(r["converged"]), cell(r["rti"]),
+        table.add_row(r["problem"], str(r["N"]), cell(r["converged"]), cell(r["c"]), cell(r["rti"]),
                       cell(r["rti"], "feedback"), cell(r["rockit"]["function"]),
                       cell(r["rockit"]["examples"]))
     Console().print(table)
@@ -240,13 +266,14 @@ def main() -> None:
     fig, ax = plt.subplots(figsize=(8, 4))
     labels = [f"{r['problem']} N={r['N']}" for r in rows]
     bars = {"converged step": lambda r: r["converged"]["step"],
+            "converged in C": lambda r: r["c"]["step"],
             "RTI step": lambda r: r["rti"]["step"], "RTI feedback": lambda r: r["rti"]["feedback"],
             "rockit to_function": lambda r: r["rockit"]["function"]["step"],
             "rockit set_initial + solve": lambda r: r["rockit"]["examples"]["step"]}
     for i, (label, get) in enumerate(bars.items()):
-        ax.bar(np.arange(len(rows)) + 0.16 * i, [get(r).get("median", np.nan) * 1e3
-                                                 for r in rows], 0.16, label=label)
-    ax.set_xticks(np.arange(len(rows)) + 0.3, labels)
+        ax.bar(np.arange(len(rows)) + 0.14 * i, [get(r).get("median", np.nan) * 1e3
+                                                 for r in rows], 0.14, label=label)
+    ax.set_xticks(np.arange(len(rows)) + 0.35, labels)
     ax.set(ylabel="median ms per step", yscale="log", title="MPC step time")
     ax.legend(fontsize=8)
     fig.tight_layout()

@@ -33,7 +33,8 @@ OMEGAS = (0.0, 1.0)
 
 
 def run(pb: og.Problem, N: int, rule: str) -> tuple[og.Solution, list[RawResult], float]:
-    """Multi-start as ``CompiledProblem.solve(multistart=True)`` does, keeping every start's result."""
+    """Multi-start as ``CompiledProblem.solve(multistart=True)`` does, keeping every start's
+    result."""
     solver = og.compile_problem(pb, N=N, retraction=rule)
     tr = solver.transcription
     p = tr.pack()

@@ -137,7 +137,8 @@ def main() -> None:
     with steps(len(Ns) * (2 + len(BASELINES))) as step:
         for N in Ns:
             step(f"N={N}: build")
-            builds = [og.compile_problem(pb, N=N).transcription for _ in range(1 if args.quick else 3)]
+            builds = [og.compile_problem(pb, N=N).transcription
+                      for _ in range(1 if args.quick else 3)]
             build = statistics.median(b.build_seconds for b in builds)
             phases = {k: statistics.median(b.build_phases[k] for b in builds)
                       for k in builds[0].build_phases}

@@ -15,8 +15,9 @@ FACTOR_CLASSES = {"Factor", "LieGroupFactor", "Pair", "SphereAction"}
 
 
 def test_layers_contract_is_kept() -> None:
-    """The import-linter contract of pyproject.toml (cli > files | export | plotting >
-    models > solve > nlp > model > groupoid > lie)."""
+    """The import-linter contract of pyproject.toml (cli > sweep | bench | mpc > files |
+    export | plotting > systems > solve | simulation > verify > nlp > model > groupoid >
+    lie)."""
     status = lint_imports(config_filename=str(PACKAGE.parent / "pyproject.toml"), no_cache=True,
                           no_logo=True)
     assert status == EXIT_STATUS_SUCCESS

@@ -36,8 +36,8 @@ pytestmark = pytest.mark.skipif(shutil.which("cc") is None or shutil.which("make
 def driver(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, og.Transcription]:
     """The rigid-body slew exported (N = 16: verified) and built with -Werror."""
     root = tmp_path_factory.mktemp("driver")
-    exp = export_c(og.compile_problem(rigid_body(), N=16, ipopt=EXPORT_IPOPT), root / "c", build=True,
-                   cflags=CFLAGS,
+    exp = export_c(og.compile_problem(rigid_body(), N=16, ipopt=EXPORT_IPOPT), root / "c",
+                   build=True, cflags=CFLAGS,
                    positive=positive_parameters(MODELS["rigid_body"].parameters))
     assert exp.binary is not None
     return exp.binary, exp.solver.transcription

@@ -93,8 +93,8 @@ def hanging_heavy_top(max_seconds: float) -> tuple[og.CompiledProblem, og.Guess]
     cfg = files.load(PROBLEMS / "heavy_top_rotors.yaml", [
         "discretization.retraction=first_order", "horizon.N=16", "solver.backend=fatrop"])
     f, d = cfg.file, cfg.file.discretization
-    solver = og.compile_problem(files.build(cfg), 16, d.retraction, d.rule, f.solver.ipopt, d.scheme,
-                        backend="fatrop", max_seconds=max_seconds)
+    solver = og.compile_problem(files.build(cfg), 16, d.retraction, d.rule, f.solver.ipopt,
+                                d.scheme, backend="fatrop", max_seconds=max_seconds)
     tr = solver.transcription
     guess = next(g for g in solver.guesses(tr, tr.pack(), True)
                  if g.label == "great circle, long way")

@@ -4,8 +4,8 @@ The NLP is built once (not timed); IPOPT then runs ``repeats`` times from the sa
 geodesic, or the multi-start guess labelled ``start`` that found the reference's minimum)
 without an iteration callback, more often when it is fast (until the runs add up to
 :data:`MIN_SECONDS`, at most :data:`MAX_REPEATS`), and the median of its wall times is the
-row's time. The last run is read out and diagnosed as :meth:`~ocgroupoid.solve.CompiledProblem.solve`
-does (replay, verdict, hint).
+row's time. The last run is read out and diagnosed as
+:meth:`~ocgroupoid.solve.CompiledProblem.solve` does (replay, verdict, hint).
 """
 
 from __future__ import annotations
@@ -36,7 +36,8 @@ class Setting:
 
     def compile(self, problem: Problem, method: Method, N: int) -> CompiledProblem:
         """``method`` compiled on N intervals in this setting."""
-        return compile_problem(problem, method.on(N, self.rule, self.steps), method.options(self.ipopt))
+        return compile_problem(problem, method.on(N, self.rule, self.steps),
+                               method.options(self.ipopt))
 
 
 @dataclass

@@ -7,8 +7,8 @@ from typing import Optional
 
 import typer
 
+from ..console import SET_HELP, err, fail, out, status
 from ..errors import OcgError
-from .console import SET_HELP, err, fail, out, status
 
 
 def export_c_command(
@@ -23,6 +23,9 @@ def export_c_command(
                                          "file of the export (e.g. so3_; default ocg_): "
                                          "exports with different prefixes link into one "
                                          "program"),
+    mpc: Optional[bool] = typer.Option(None, "--mpc/--no-mpc", help="the closed loop in C "
+                                       "(OUT/mpc); default: written when the problem has "
+                                       "one (a fixed T, second-order dynamics)"),
 ) -> None:
     """Export the compiled problem as a C project (IPOPT via CasADi codegen): `make -C OUT`
     builds OUT/solve, which prints the solution JSON; OUT/README.md tells the rest. Needs a
@@ -38,10 +41,12 @@ def export_c_command(
             done = export_c(files.build(cfg), out_dir, force=force,
                             positive=positive_parameters(cfg.spec.parameters),
                             prefix=prefix or DEFAULT_PREFIX, method=files.method(cfg),
-                            options=files.options(cfg))
+                            options=files.options(cfg), mpc=mpc)
         if build:
             with status("building with make...", False):
                 binary = make(done.folder, cflags)
+                if done.mpc is not None:
+                    make(done.folder, cflags, "mpc")
     except OcgError as e:
         fail(str(e))
         return

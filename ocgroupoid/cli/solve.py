@@ -10,8 +10,8 @@ from typing import Any, Optional
 import typer
 
 from .._startup import interrupt_exit_code
+from ..console import SET_HELP, err, fail, out, silent, status, stopped_by
 from ..errors import ConfigError, OcgError
-from .console import SET_HELP, err, fail, out, silent, status, stopped_by
 from .summary import grid_line, summary
 
 LONG_SOLVE = 10.0  # seconds: a solve estimated longer is announced with its estimate

@@ -60,6 +60,7 @@ from ..nlp.transcription import Transcription
 from ..solve.compiled import CompiledProblem
 from ..solve.outputs import write_atomic
 from ..verify.graph import CHECKS, FIGURES
+from . import mpc as closed_loop
 from .build import casadi_dir, ipopt_paths, make  # noqa: F401  (casadi_dir: the export API)
 from .folder import MANIFEST, claim_folder, digest, manifest
 from .functions import CHECK_FAILURES, generate
@@ -114,6 +115,7 @@ class Export:
     n_values: int  # numbers of a parameter file
     binary: Path | None  # DIR/solve when built
     solver: CompiledProblem
+    mpc: Path | None = None  # DIR/mpc (built with the export's build) when the loop was written
 
 
 def _c_string(s: str) -> str:
@@ -311,7 +313,7 @@ def export_c(problem: Problem | CompiledProblem, folder: str | Path, N: int | No
              force: bool = False, positive: Collection[str] = (),
              backend: str | None = None, max_seconds: float | None = None,
              prefix: str = DEFAULT_PREFIX, *, method: Method | None = None,
-             options: SolverOptions | None = None) -> Export:
+             options: SolverOptions | None = None, mpc: bool | None = None) -> Export:
     """Write ``problem`` compiled with ``method`` (N intervals, scheme, retraction, rule)
     and ``options`` (backend, IPOPT's options, ``max_seconds``) as a C project in
     ``folder``; the keywords N to max_seconds replace their fields, as in
@@ -334,7 +336,8 @@ def export_c(problem: Problem | CompiledProblem, folder: str | Path, N: int | No
     time of one run of ``./solve`` (IPOPT's ``max_wall_time``; the driver stops anything that
     runs longer, e.g. fatrop). ``prefix`` (lower case, ending in ``_``) starts every symbol,
     macro (in upper case) and C file name of the export: exports with different prefixes
-    link into one program.
+    link into one program. ``mpc``: the closed loop in C (``{prefix}mpc.h``, ``DIR/mpc``:
+    :mod:`~ocgroupoid.export.mpc`); None writes it when the problem has one, True requires it.
     """
     method, options = choose(method, options, N=N, retraction=retraction, rule=rule,
                              ipopt=ipopt, scheme=scheme, steps=steps, backend=backend,
@@ -358,13 +361,18 @@ def export_c(problem: Problem | CompiledProblem, folder: str | Path, N: int | No
     tr = solver.transcription
     p = tr.pack()
     names = {"prefix": prefix, "PREFIX": prefix.upper(), "VERSION": __version__}
-    files: dict[str, str | bytes] = dict(generate(tr, solver.ipopt, prefix,
-                                                  _render("prelude.c.in", names)))
+    loop = closed_loop.wanted(tr, mpc)
+    files: dict[str, str | bytes] = dict(generate(
+        tr, solver.ipopt, prefix, _render("prelude.c.in", names),
+        closed_loop.functions(tr, p, prefix) if loop else ()))
     guess = tr.guess_labels[0]  # what the C solver starts from
-    model = {**names, **model_values(tr, p, guess, positive)}
-    for name in PREFIXED:
+    model = {**names, **model_values(tr, p, guess, positive),
+             **(closed_loop.values(tr) if loop else {})}
+    for name in PREFIXED + (closed_loop.PREFIXED if loop else ()):
         files[prefix + name] = _render(f"{name}.in", model)
     files["main.c"] = _render("main.c.in", names)
+    if loop:
+        files[closed_loop.DRIVER] = _render(f"{closed_loop.DRIVER}.in", model)
     pb = tr.problem
     info = {**names, "PROBLEM": plain_name(pb.name), "N": tr.N,
             "RETRACTION": tr.disc.retraction, "RULE": tr.disc.rule, "ORDER": pb.order,
@@ -374,7 +382,8 @@ def export_c(problem: Problem | CompiledProblem, folder: str | Path, N: int | No
             "GUESS": _one_line(guess), "BACKEND": tr.backend,
             "BACKEND_LIBS": BACKEND_LIBS[tr.backend], "KEYS": _blocks_table(tr.values)}
     files["Makefile"] = _render("Makefile.in", {
-        **info, "IPOPT_LIB": _make_value(lib), "IPOPT_INCLUDE": _make_value(include)})
+        **info, "IPOPT_LIB": _make_value(lib), "IPOPT_INCLUDE": _make_value(include),
+        **closed_loop.make_values(prefix, loop)})
     files["README.md"] = _render("README.md.in", info)
     files["params.txt"] = params_text(tr.values, tr.values.values_of(p), (
         f"{plain_name(pb.name)}: the exported instance (N={tr.N}, {tr.disc.retraction}). "
@@ -383,4 +392,6 @@ def export_c(problem: Problem | CompiledProblem, folder: str | Path, N: int | No
     folder.mkdir(parents=True, exist_ok=True)
     _write_all(folder, files)
     binary = make(folder, cflags) if build else None
-    return Export(folder, pb.name, tr.N, tr.nx, tr.np, tr.ng, tr.values.size, binary, solver)
+    driver = (make(folder, cflags, "mpc") if build else folder / "mpc") if loop else None
+    return Export(folder, pb.name, tr.N, tr.nx, tr.np, tr.ng, tr.values.size, binary, solver,
+                  driver)

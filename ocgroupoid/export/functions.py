@@ -18,7 +18,7 @@ from __future__ import annotations
 import re
 import tempfile
 from pathlib import Path
-from typing import Any
+from typing import Any, Sequence
 
 import casadi as ca
 
@@ -99,18 +99,21 @@ def solver_function(tr: Transcription, prefix: str, warm: bool = False) -> ca.Fu
 
 
 def generate(tr: Transcription, ipopt: dict[str, Any] | None, prefix: str,
-             prelude: str) -> dict[str, str]:
+             prelude: str, loop: Sequence[ca.Function] = ()) -> dict[str, str]:
     """The CasADi-generated ``{prefix}generated.c/.h`` and ``{prefix}generated_warm.c/.h``
     (the warm-start solver: a second IPOPT instance, whose generated callbacks would clash
-    with the first's in one file), each C file after ``prelude``; generated in a
-    temporary folder. The file name is CasADi's prefix of its internal symbols."""
+    with the first's in one file), and with ``loop`` (:mod:`~ocgroupoid.export.mpc`)
+    ``{prefix}generated_mpc.c/.h`` of its Functions; each C file after ``prelude``; generated
+    in a temporary folder. The file name is CasADi's prefix of its internal symbols."""
+    groups: list[tuple[str, Sequence[ca.Function]]] = [
+        (f"{prefix}generated", (solver_function(tr, prefix), guess_function(tr, prefix),
+                                pack_function(tr, prefix), post_function(tr, prefix),
+                                verify_export(tr, ipopt, prefix))),
+        (f"{prefix}generated_warm", (solver_function(tr, prefix, warm=True),))]
+    if loop:
+        groups.append((f"{prefix}generated_mpc", loop))
     out = {}
-    for name, fns in ((f"{prefix}generated", (solver_function(tr, prefix),
-                                               guess_function(tr, prefix),
-                                               pack_function(tr, prefix),
-                                               post_function(tr, prefix),
-                                               verify_export(tr, ipopt, prefix))),
-                      (f"{prefix}generated_warm", (solver_function(tr, prefix, warm=True),))):
+    for name, fns in groups:
         cg = ca.CodeGenerator(name, {"with_header": True})
         for fn in fns:
             cg.add(fn)

@@ -45,6 +45,7 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from ..errors import ConfigError, SolverError
 from ..model.problem import Problem
 from ..nlp.assembly import Kind
+from ..nlp.loop import check_fixed_horizon
 from ..nlp.method import DEFAULT_RETRACTION, Method
 from ..nlp.options import DEFAULT_BACKEND, SolverOptions
 from ..nlp.schemes import DEFAULT_RULE, DEFAULT_SCHEME
@@ -66,7 +67,7 @@ MIN_HORIZON = 1
 CONTROL_SAMPLES = 8
 
 
-def _check(steps: int, N: int, horizon: str, T_free: bool, sample: float | None,
+def _check(steps: int, N: int, horizon: str, sample: float | None,
            min_horizon: int) -> None:
     if horizon not in HORIZONS:
         raise ConfigError(f"horizon must be {' or '.join(HORIZONS)}, got {horizon!r}")
@@ -75,9 +76,6 @@ def _check(steps: int, N: int, horizon: str, T_free: bool, sample: float | None,
     if horizon == "shrinking" and steps > N:
         raise ConfigError(f"a shrinking horizon ends at the final time after N = {N} samples; "
                           f"got steps = {steps}: ask for at most {N}, or a receding horizon")
-    if T_free:
-        raise ConfigError("MPC needs a fixed horizon T; this problem's final time is free: "
-                          "fix it (horizon.T) for the loop")
     if isinstance(min_horizon, bool) or not isinstance(min_horizon, int) or min_horizon < 1:
         raise ConfigError(f"min_horizon must be a number of samples >= 1, got {min_horizon!r}")
     if sample is not None and not (np.isfinite(sample) and sample > 0):
@@ -125,7 +123,8 @@ def mpc(problem: Problem, N: int = 32, steps: int | None = None, *, rti: bool = 
     open-loop plan does not solve.
     """
     K = steps if steps is not None else (N if horizon == "shrinking" else 2 * N)
-    _check(K, N, horizon, problem.T_free, sample, min_horizon)
+    _check(K, N, horizon, sample, min_horizon)
+    check_fixed_horizon(problem)
     mismatch = dict(mismatch or {})
     solver = CompiledProblem(problem, Method(N, scheme=scheme, retraction=retraction, rule=rule),
                     SolverOptions(backend=backend, ipopt=dict(ipopt or {})))

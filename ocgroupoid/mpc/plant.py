@@ -3,7 +3,8 @@
 The continuous controlled Euler-Lagrange(-Poincaré) equations of the problem
 (:class:`~ocgroupoid.nlp.dynamics.Dynamics`, the right-hand side the replay of every solution
 integrates, :mod:`~ocgroupoid.verify.replay`) are integrated by classical RK4
-(:func:`~ocgroupoid.nlp.dynamics.rk4`) with :data:`SUBSTEPS` substeps per piece of the applied
+(:func:`~ocgroupoid.nlp.loop.plant_piece`: the exported C's too) with
+:data:`~ocgroupoid.nlp.loop.SUBSTEPS` substeps per piece of the applied
 control polynomial, with the plant's own parameters (the model's, some scaled: a mismatch such
 as inertia x 1.05). After each sample the velocities receive process noise: independent
 normal kicks of standard deviation ``noise`` (in the velocities' units), from a seeded
@@ -12,18 +13,12 @@ generator, so that a run is reproducible.
 
 from __future__ import annotations
 
-from typing import Any
-
 import casadi as ca
 import numpy as np
 
 from ..errors import ConfigError
-from ..nlp.dynamics import Dynamics, rk4
+from ..nlp.loop import plant_dynamics, plant_piece
 from ..nlp.transcription import Transcription
-
-#: RK4 substeps per control piece: at the samples of the problem files (h ~ 0.1-0.3 s,
-#: rates ~ 1 rad/s) the integration error is ~1e-9, far below any noise or mismatch studied
-SUBSTEPS = 16
 
 
 def mismatched(tr: Transcription, p: np.ndarray, mismatch: dict[str, float]) -> np.ndarray:
@@ -50,41 +45,17 @@ class Plant:
         pb = tr.problem
         if not np.isfinite(noise) or noise < 0:
             raise ConfigError(f"noise must be a finite standard deviation >= 0, got {noise}")
-        dyn = Dynamics(pb, tr.scheme.stages)
-        if dyn.rhs is None or not dyn.second:
-            raise ConfigError(f"{pb.name!r} has no continuous second-order dynamics to run a "
-                              f"plant on ({dyn.reason or 'a first-order problem'}); MPC needs "
-                              "a mechanical problem (mechanics() or accelerations as controls)")
+        rhs = plant_dynamics(tr)
         self.P, self.noise = np.asarray(P, dtype=float), float(noise)
         self.rng = np.random.default_rng(seed)
         self.ns, self.ny = pb.groupoid.state_size, pb.groupoid.algebra_dim
-        self._rhs = dyn.rhs
+        self._rhs = rhs
         self._pieces: dict[int, ca.Function] = {}
 
     def _piece(self, k: int, m: int) -> ca.Function:
-        """``(z, c, tau0, dt, P) -> z``: :data:`SUBSTEPS` RK4 steps over dt from the
-        polynomial's local time tau0 (coefficients c, highest power first, m components)."""
+        """:func:`~ocgroupoid.nlp.loop.plant_piece` for polynomials of k coefficients."""
         if k not in self._pieces:
-            nz = self.ns + self.ny
-            z, c, tau0, dt, P = (ca.SX.sym(n, d) for n, d in (
-                ("z", nz), ("c", k * m), ("tau0", 1), ("dt", 1), ("P", self.P.size)))
-            cm = ca.reshape(c, m, k)
-            step = dt / SUBSTEPS
-
-            def u_at(t: Any) -> Any:
-                u = cm[:, 0]
-                for j in range(1, k):
-                    u = u * t + cm[:, j]
-                return u
-
-            zz = z
-            for i in range(SUBSTEPS):
-                t0 = tau0 + i * step
-                def rhs(v: Any, s: float, t0: Any = t0) -> Any:
-                    return self._rhs(v, u_at(t0 + s * step), P)
-
-                zz = rk4(rhs, zz, step)
-            self._pieces[k] = ca.Function("plant_piece", [z, c, tau0, dt, P], [zz])
+            self._pieces[k] = plant_piece(self._rhs, self.ns + self.ny, k, m, self.P.size)
         return self._pieces[k]
 
     def advance(self, z: np.ndarray, ppoly: dict[str, np.ndarray], t0: float, t1: float

@@ -20,31 +20,12 @@ correct.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
-from ..nlp.stageform import StageForm, stage_form
+from ..nlp.loop import move, parts
+from ..nlp.stageform import stage_form
 from ..nlp.transcription import Transcription
 from .rti import Iterate
-
-
-@dataclass(frozen=True)
-class _Part:
-    """One part of every stage: its offset and size per stage in a stage-ordered vector."""
-
-    start: np.ndarray
-    size: np.ndarray
-
-
-def _parts(sf: StageForm) -> tuple[list[_Part], list[_Part]]:
-    """The (x, u) parts of z and the (gap, stage rows) parts of the rows, per stage."""
-    nx, nu, ng = (np.asarray(v) for v in (sf.nx, sf.nu, sf.ng))
-    z_start = np.concatenate([[0], np.cumsum(nx + nu)[:-1]])
-    gaps = np.concatenate([nx[1:], [0]])  # stage k's gap rows define x_{k+1}
-    r_start = np.concatenate([[0], np.cumsum(gaps + ng)[:-1]])
-    return ([_Part(z_start, nx), _Part(z_start + nx, nu)],
-            [_Part(r_start, gaps), _Part(r_start + gaps, ng)])
 
 
 class Shift:
@@ -53,7 +34,7 @@ class Shift:
     def __init__(self, tr: Transcription) -> None:
         self.tr = tr
         self.form = stage_form(tr.blocks, tr.nx)
-        self.z_parts, self.row_parts = _parts(self.form)
+        self.z_parts, self.row_parts = parts(self.form)
 
     def sigma(self, h: float, T: float, T_next: float) -> np.ndarray:
         """The fractional stage of the last point where each new stage sits."""
@@ -63,29 +44,7 @@ class Shift:
     def __call__(self, it: Iterate, sigma: np.ndarray) -> Iterate:
         """The point ``it`` moved to the stages ``sigma`` (:meth:`sigma`)."""
         sf = self.form
-        z = _move(sf.z_of(it.x), self.z_parts, sigma)
-        lam_z = _move(sf.z_of(it.lam_x), self.z_parts, sigma)
-        rows = _move(sf.rows_z(it.lam_g), self.row_parts, sigma)
+        z = move(sf.z_of(it.x), self.z_parts, sigma)
+        lam_z = move(sf.z_of(it.lam_x), self.z_parts, sigma)
+        rows = move(sf.rows_z(it.lam_g), self.row_parts, sigma)
         return Iterate(sf.x_of(z), sf.rows_x(rows), sf.x_of(lam_z))
-
-
-def _move(v: np.ndarray, parts: list[_Part], sigma: np.ndarray) -> np.ndarray:
-    """Every stage's parts of the stage-ordered vector v taken at the fractional stages."""
-    out = v.copy()
-    K = sigma.size - 1
-    for part in parts:
-        for k in range(K + 1):
-            n = part.size[k]
-            if n == 0:
-                continue
-            s = min(max(sigma[k], 0.0), float(K))
-            k0 = int(np.floor(s))
-            k1, w = min(k0 + 1, K), s - k0
-            here = slice(part.start[k], part.start[k] + n)
-            sources = [(j, wt) for j, wt in ((k0, 1.0 - w), (k1, w))
-                       if part.size[j] == n and wt > 0.0]
-            total = sum(wt for _, wt in sources)
-            if total > 0.0:
-                out[here] = sum(wt * v[part.start[j]:part.start[j] + n]
-                                for j, wt in sources) / total
-    return out

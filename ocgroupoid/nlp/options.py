@@ -19,8 +19,8 @@ from ..errors import ConfigError
 
 #: the wall time one solve may take (seconds, ``solver.max_seconds``): IPOPT's
 #: ``max_wall_time`` for each of its runs, and the deadline of a fatrop run
-#: (:mod:`~ocgroupoid.nlp.isolated`); :class:`~ocgroupoid.solve.CompiledProblem` holds every start of
-#: one solve to it together
+#: (:mod:`~ocgroupoid.nlp.isolated`); :class:`~ocgroupoid.solve.CompiledProblem` holds every
+#: start of one solve to it together
 MAX_SECONDS = 600.0
 #: the NLP solvers: IPOPT on the whole sparse KKT system (MUMPS), or fatrop on the stage form
 #: (:mod:`~ocgroupoid.nlp.backends.fatrop`)

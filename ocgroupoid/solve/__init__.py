@@ -1,5 +1,6 @@
-"""Solving a transcription: guesses, IPOPT (multi-start, continuation), the read-out into a
-Solution, and the checks that do not trust the solver."""
+"""Solving: the compiled problem (multi-start, continuation, adaptive steps), its guesses, the
+read-out into a Solution, and accuracy on demand. Verifying a solution is
+:mod:`ocgroupoid.verify`'s job; running a problem forward, :mod:`ocgroupoid.simulation`'s."""
 
 from .accuracy import Level, solve_to_accuracy
 from .compiled import CompiledProblem, Minimum, distinct_minima

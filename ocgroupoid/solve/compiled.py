@@ -17,6 +17,7 @@ import numpy as np
 
 from ..errors import ConfigError
 from ..model.problem import Problem
+from ..nlp import mesh
 from ..nlp.backends import TIMED_OUT
 from ..nlp.method import Discretization, Method
 from ..nlp.options import SolverOptions
@@ -24,9 +25,10 @@ from ..nlp.program import Guess
 from ..nlp.shortcuts import choose
 from ..nlp.transcription import RawResult, Transcription
 from ..nlp.watch import Listener
+from ..verify import richardson
 from ..verify.diagnostics import replay_of
 from ..verify.verdict import REPLAY_TOLERANCE, scales
-from . import mesh, parallel, richardson
+from . import parallel
 from .guesses import as_guess, geodesic_guesses, interpolate, model_guesses, perturbed_guesses
 from .interrupt import Interrupt, interruptible
 from .readout import control_ppoly, make_solution

@@ -98,7 +98,8 @@ def solver_for(structure: str, pb: Problem, cfg: Config, args: dict[str, Any]
     from ..files.solving import method, options
 
     # the file's method and options; multi-start and continuation are each attempt's own
-    solver = compile_problem(pb, method(cfg), replace(options(cfg), multistart=False, continuation=()))
+    solver = compile_problem(pb, method(cfg),
+                             replace(options(cfg), multistart=False, continuation=()))
     _solvers[structure] = solver
     _solvers.move_to_end(structure)
     while len(_solvers) > CACHE_SIZE:

@@ -1,0 +1,117 @@
+"""The closed loop in exported C: ``{prefix}mpc.c/.h`` and the driver ``DIR/mpc``.
+
+The C loop (``c_templates/mpc.c.in``) is Python's converged loop with a receding horizon
+(:func:`ocgroupoid.mpc.mpc`, ``rti=False``), its sample h = T/N; its arithmetic is the
+Functions of :mod:`ocgroupoid.nlp.loop` the Python loop evaluates, generated here into
+``{prefix}generated_mpc.c``: the plant piece, the shift by one sample (its fractional stages
+those of h = T/N at the exported T: the classic shift by one stage), the measured state into
+p, the initial state of p, distances, terminal errors and the bound violation.
+
+An export writes the loop when the problem has one (:func:`reason`): a fixed final time and
+continuous second-order dynamics, as Python's loop requires.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from ..errors import ConfigError
+from ..nlp.assembly import Kind
+from ..nlp.loop import (
+    check_fixed_horizon,
+    distance_function,
+    distance_names,
+    initial_state,
+    plant_dynamics,
+    plant_piece,
+    shift_function,
+    terminal_function,
+    terminal_names,
+    violation_function,
+    with_state_function,
+)
+from ..nlp.program import C_READOUT_OUTPUTS
+from ..nlp.stageform import stage_form
+from ..nlp.transcription import Transcription
+
+#: the loop's files rendered from c_templates (prefixed as the library's) and the driver's
+PREFIXED = ("mpc.h", "mpc.c")
+DRIVER = "mpc_main.c"
+
+
+def reason(tr: Transcription) -> str | None:
+    """Why ``tr`` has no closed loop (the message Python's ``og.mpc`` raises), or None."""
+    try:
+        check_fixed_horizon(tr.problem)
+        plant_dynamics(tr)
+    except ConfigError as err:
+        return str(err)
+    return None
+
+
+def wanted(tr: Transcription, mpc: bool | None) -> bool:
+    """Whether an export writes the loop: ``mpc`` None writes it when the problem has one,
+    True requires it (a ConfigError says why not), False leaves it out."""
+    why = reason(tr)
+    if mpc and why is not None:
+        raise ConfigError(f"export with mpc: {why}; or export without the loop "
+                          "(mpc=False, export-c --no-mpc)")
+    return mpc is not False and why is None
+
+
+def functions(tr: Transcription, p: np.ndarray, prefix: str) -> list[ca.Function]:
+    """The loop's Functions (:mod:`ocgroupoid.nlp.loop`), named ``{prefix}gen_...``."""
+    m = len(tr.problem.controls)
+    k = _coefficients(tr) // max(m, 1)
+    G = tr.problem.groupoid
+    sf = stage_form(tr.blocks, tr.nx)
+    T = tr.horizon_of(p)
+    h = T / tr.N
+    sigma = sf.K * h / T + np.arange(sf.K + 1) * T / T  # Shift.sigma(h, T, T)
+    n = f"{prefix}gen_"
+    return [plant_piece(plant_dynamics(tr), G.state_size + G.algebra_dim, k, m,
+                        tr.layout.p_slices["P"].stop - tr.layout.p_slices["P"].start,
+                        n + "plant"),
+            shift_function(tr, sf, sigma, n + "shift"), with_state_function(tr, n + "with_state"),
+            initial_state(tr, n + "initial_state"), distance_function(tr, n + "distance"),
+            terminal_function(tr, n + "terminal"),
+            violation_function(tr, tr.rows(Kind.INEQUALITY).ravel(), n + "violation")]
+
+
+def _coefficients(tr: Transcription) -> int:
+    """The numbers of one piece of the read-out's control polynomial (k m)."""
+    x, p, lam = ca.MX.sym("x", tr.nx), ca.MX.sym("p", tr.np), ca.MX.sym("lam_g", tr.ng)
+    out = tr.readout_function(x, p, lam)[C_READOUT_OUTPUTS.index("control_coefficients")]
+    return int(out.size1())
+
+
+def _names(names: list[str]) -> str:
+    return "{" + (", ".join(f'"{n}"' for n in names) or "0") + "}"
+
+
+def values(tr: Transcription) -> dict[str, Any]:
+    """What mpc.h.in and mpc.c.in are filled with."""
+    G, P = tr.problem.groupoid, tr.layout.p_slices["P"]
+    return {"MPC_NZ": G.state_size + G.algebra_dim, "MPC_NS": G.state_size,
+            "MPC_NP_PLANT": P.stop - P.start, "MPC_P_OFFSET": P.start,
+            "MPC_N_DISTANCES": len(distance_names(tr)), "MPC_N_TERMINAL": len(terminal_names(tr)),
+            "MPC_DISTANCE_NAMES": _names(distance_names(tr)),
+            "MPC_TERMINAL_NAMES": _names(terminal_names(tr)),
+            "MPC_PIECE_COEFFICIENTS": max(_coefficients(tr), 1)}
+
+
+def make_values(prefix: str, on: bool) -> dict[str, str]:
+    """The Makefile's lines of the loop: its objects, headers and the driver's rule."""
+    if not on:
+        return {"MPC_OBJECTS": "", "MPC_HEADERS": "", "MPC_ALL": "", "MPC_RULE": "",
+                "MPC_CLEAN": ""}
+    return {"MPC_OBJECTS": f" {prefix}mpc.o {prefix}generated_mpc.o",
+            "MPC_HEADERS": f" {prefix}mpc.h {prefix}generated_mpc.h", "MPC_ALL": " mpc",
+            "MPC_RULE": ("# The closed loop (README.md, The closed loop): ./mpc --steps K ...\n"
+                         "mpc: mpc_main.o @prefix@params.o libocg.a\n"
+                         "\t$(CC) $(OPT) $(CFLAGS) $(LDFLAGS) -o $@ mpc_main.o @prefix@params.o "
+                         "libocg.a $(OCG_LDLIBS) $(LDLIBS)\n").replace("@prefix@", prefix),
+            "MPC_CLEAN": " mpc mpc_main.o"}

@@ -1,0 +1,114 @@
+"""The closed loop in exported C (ocgroupoid.export.mpc, DIR/mpc) against Python's og.mpc.
+
+The rigid body on SO(3) of tests/test_mpc.py (so3_rest_to_rest, N = 16, |u_i| <= 0.45),
+its plant's inertia 5 % larger, no noise, receding horizon, converged re-solves: C runs the
+same arithmetic (the Functions of ocgroupoid.nlp.loop, generated) and the same IPOPT from
+the same points, so its applied controls are Python's to 1e-8 (measured: equal to the bit;
+IPOPT's tol is the default 1e-10 in both).
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import ocgroupoid as og
+from ocgroupoid import files
+from ocgroupoid.errors import ConfigError
+from ocgroupoid.export import export_c
+
+from .cbuild import CFLAGS
+
+FILE = "problems/so3_rest_to_rest.yaml"
+N = 16
+STEPS = 2 * N  # the default of both loops
+COMPARED = 20
+SETS = [f"horizon.N={N}", "bounds={u: [-0.45, 0.45]}"]
+MISMATCH = {"inertia": 1.05}
+TOL = 1e-8
+
+
+@pytest.fixture(scope="module")
+def problem() -> og.Problem:
+    return files.build(files.load(FILE, SETS))
+
+
+@pytest.fixture(scope="module")
+def driver(problem: og.Problem, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    folder = tmp_path_factory.mktemp("so3_mpc")
+    done = export_c(problem, folder, N=N, build=True, cflags=CFLAGS, mpc=True)
+    assert done.mpc == folder / "mpc"
+    return done.mpc
+
+
+@pytest.fixture(scope="module")
+def runs(problem: og.Problem, driver: Path) -> tuple[og.MpcResult, dict]:
+    r = subprocess.run([str(driver), "--steps", str(STEPS), "--mismatch", "inertia=1.05"],
+                       capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    return og.mpc(problem, N, STEPS, mismatch=MISMATCH), json.loads(r.stdout)
+
+
+def test_c_loop_applies_pythons_controls(runs: tuple[og.MpcResult, dict]) -> None:
+    """The first 20 applied controls of C's loop are Python's to 1e-8, and so are the
+    plant's states, statuses and iterations (the warm starts work alike)."""
+    py, c = runs
+    u_py = np.array([s.control for s in py.steps])[:COMPARED]
+    u_c = np.array([s["control"] for s in c["steps"]])[:COMPARED]
+    assert u_c.shape == u_py.shape == (COMPARED, 3)
+    assert np.max(np.abs(u_c - u_py)) <= TOL
+    assert np.max(np.abs(np.array(c["trajectory"]["z"]) - py.z)) <= TOL
+    assert [s["status"] for s in c["steps"]] == [s.status for s in py.steps]
+    assert [s["iterations"] for s in c["steps"]] == [s.iterations for s in py.steps]
+    assert max(s.iterations for s in py.steps[2:]) < py.steps[0].iterations  # warm
+
+
+def test_c_loop_reaches_the_target_like_python(runs: tuple[og.MpcResult, dict]) -> None:
+    """After 2N samples both loops are as close to the target (to 1e-8), far closer than
+    the 2.5 rad they started from; no step failed, the bounds held; the JSON has the keys
+    of Python's mpc.json."""
+    py, c = runs
+    s = c["summary"]
+    assert s["failed_steps"] == 0 == py.failed_steps
+    for key, value in py.terminal_error.items():
+        assert abs(s["terminal_error"][key] - value) <= TOL
+    assert s["terminal_error"]["R"] < 0.05
+    assert s["bound_violation_max"] <= 1e-6
+    assert abs(s["tracking_error_max"] - py.tracking_error_max) <= TOL
+    assert set(py.to_dict()) - set(c) == {"bounds"}
+    assert set(py.summary()) == set(s)
+    assert set(c["steps"][0]) == set(py.steps[0].as_dict()) | {"tracking_error_max"}
+    timing = s["timing"]["step"]
+    assert timing["count"] == STEPS - 1 and 0 < timing["median"] <= timing["max"]
+
+
+def test_c_driver_refuses_bad_input(driver: Path) -> None:
+    """An unknown parameter or a bad factor: exit 2 and a message saying what to write."""
+    for args, said in ((["--mismatch", "mass=2"], "no parameter"),
+                       (["--mismatch", "inertia=-1"], "> 0"), (["--steps", "0"], ">= 1")):
+        r = subprocess.run([str(driver), *args], capture_output=True, text=True, timeout=60)
+        assert r.returncode == 2 and said in r.stderr, (args, r.stderr)
+
+
+@pytest.mark.parametrize("file, sets, said", [
+    ("problems/so3_minimum_time.yaml", ["horizon.N=8"], "final time is free"),
+    ("problems/dubins_car.yaml", ["horizon={T: 6.0, N: 8}", "objective={effort: 1.0, time: 0.0}",
+                                  "discretization={scheme: order2}"],
+     "no continuous second-order dynamics"),
+])
+def test_a_problem_without_a_loop_is_refused_as_in_python(file: str, sets: list[str],
+                                                          said: str, tmp_path: Path) -> None:
+    """mpc=True on a free final time or a first-order problem: Python's message; without
+    mpc=True the export goes on without the loop."""
+    pb = files.build(files.load(file, sets))
+    with pytest.raises(ConfigError, match=said) as python:
+        og.mpc(pb, 8, 2)
+    with pytest.raises(ConfigError, match=said) as exported:
+        export_c(pb, tmp_path / "a", N=8, mpc=True)
+    assert str(python.value) in str(exported.value)
+    done = export_c(pb, tmp_path / "b", N=8)
+    assert done.mpc is None and not (done.folder / "mpc_main.c").exists()
