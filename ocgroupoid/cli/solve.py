@@ -26,7 +26,7 @@ def solve(
 ) -> None:
     """Build, solve and summarise a problem file; optionally write the solution JSON."""
     from .. import files
-    from ..solve import compile_problem as compile_problem
+    from ..solve import compile_problem
 
     try:
         cfg = files.load(file, set_)
