@@ -24,7 +24,7 @@ from ocgroupoid import files
 from ocgroupoid.bench.record import write_summary
 from ocgroupoid.bench.script import arguments, steps
 from ocgroupoid.bench.timing import median_seconds
-from ocgroupoid.solve import compile_problem as compile_problem
+from ocgroupoid.solve import compile_problem
 
 ROOT = Path(__file__).resolve().parent.parent
 PROBLEMS = ROOT / "problems"

@@ -22,7 +22,7 @@ from ocgroupoid import files
 from ocgroupoid.bench.chart import save_png
 from ocgroupoid.bench.record import write_summary
 from ocgroupoid.bench.script import arguments
-from ocgroupoid.solve import compile_problem as compile_problem
+from ocgroupoid.solve import compile_problem
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "results"

@@ -15,7 +15,7 @@ from ocgroupoid.errors import ConfigError
 from ocgroupoid.nlp.assembly import Block, Kind
 from ocgroupoid.nlp.schemes.base import stage_function
 from ocgroupoid.nlp.stageform import NotStaged, StageForm, stage_form
-from ocgroupoid.solve import compile_problem as compile_problem
+from ocgroupoid.solve import compile_problem
 
 ROOT = Path(__file__).resolve().parent.parent
 PROBLEMS = sorted((ROOT / "problems").glob("*.yaml"))

@@ -12,42 +12,32 @@ from pathlib import Path
 from typing import Callable, Iterator, Optional
 
 import typer
-from rich.console import Console
+
+from ..console import err, fail, out, stopped_by
 
 bench = typer.Typer(no_args_is_help=True, add_completion=False,
                     help="Benchmarks: our schemes against RK4 shooting baselines.")
-out = Console()
-err = Console(stderr=True, soft_wrap=True)
 
 SET_HELP = "Override any key of the file: KEY=VALUE, the value read as YAML."
 OUT_HELP = ("results folder: rows and summary in OUT/{what}/NAME.jsonl|json, the chart in "
             "OUT/figures/{what}_NAME.png")
 
 
-def _fail(message: str, code: int = 2) -> None:
-    """One line on stderr (plain text, not rich markup) and the exit code."""
-    from rich.markup import escape
-
-    err.print(f"[bold red]error:[/] {escape(message)}", highlight=False, markup=True)
-    raise typer.Exit(code)
-
-
 @contextmanager
 def _failures(rows: Callable[[], Path]) -> Iterator[None]:
     """Errors as exit codes: a solver failure 1, bad input 2 (one line each), Ctrl-C 130
     (SIGTERM 143) naming where the finished ``rows()`` are kept."""
-    from .._startup import interrupt_exit_code, terminated
+    from .._startup import interrupt_exit_code
     from ..errors import OcgError, SolverError
 
     try:
         yield
     except SolverError as e:
-        _fail(str(e), 1)
+        fail(str(e), 1)
     except OcgError as e:
-        _fail(str(e))
+        fail(str(e))
     except KeyboardInterrupt:
-        _fail(f"{'terminated (SIGTERM)' if terminated() else 'interrupted'}; the finished rows "
-              f"are kept in {rows()}", interrupt_exit_code())
+        fail(f"{stopped_by()}; the finished rows are kept in {rows()}", interrupt_exit_code())
 
 
 @bench.command("work-precision")

@@ -12,9 +12,9 @@ import typer
 
 from .._startup import interrupt_exit_code
 from ..bench.commands import bench
+from ..console import err, stopped_by
 from ..mpc.command import mpc_command
 from . import check, export_c, listing, plot, solve, sweep, view
-from .console import err, stopped_by
 
 app = typer.Typer(no_args_is_help=True, add_completion=False, pretty_exceptions_enable=False,
                   help="Optimal control on Lie groups and groupoids: solve YAML problem files.")

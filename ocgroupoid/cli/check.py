@@ -9,8 +9,8 @@ from typing import Any
 import typer
 from rich.table import Table
 
+from ..console import SET_HELP, fail, out
 from ..errors import OcgError
-from .console import SET_HELP, fail, out
 
 
 def check(

@@ -7,8 +7,8 @@ from typing import Optional
 
 import typer
 
+from ..console import SET_HELP, err, fail, out, status
 from ..errors import OcgError
-from .console import SET_HELP, err, fail, out, status
 
 
 def export_c_command(

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from rich.table import Table
 
-from .console import out
+from ..console import out
 
 CUSTOM_SUMMARY = ("your own model, written in the problem file: a definition section (groupoid "
                   "factors, Lagrangian or controls, cost); e.g. custom_rigid_body.yaml")

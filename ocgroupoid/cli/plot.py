@@ -6,8 +6,8 @@ from pathlib import Path
 
 import typer
 
+from ..console import fail, out
 from ..errors import OcgError
-from .console import fail, out
 
 
 def plot(

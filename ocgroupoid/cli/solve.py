@@ -10,8 +10,8 @@ from typing import Any, Optional
 import typer
 
 from .._startup import interrupt_exit_code
+from ..console import SET_HELP, err, fail, out, silent, status, stopped_by
 from ..errors import ConfigError, OcgError
-from .console import SET_HELP, err, fail, out, silent, status, stopped_by
 from .summary import grid_line, summary
 
 LONG_SOLVE = 10.0  # seconds: a solve estimated longer is announced with its estimate
@@ -26,7 +26,7 @@ def solve(
 ) -> None:
     """Build, solve and summarise a problem file; optionally write the solution JSON."""
     from .. import files
-    from ..solve import compile_problem as compile_problem
+    from ..solve import compile_problem
 
     try:
         cfg = files.load(file, set_)
@@ -80,6 +80,7 @@ def solve(
 def _solve_to_accuracy(problem: Any, f: Any, quiet: bool) -> Any:
     """``horizon.N: auto``: the grid search of :mod:`ocgroupoid.solve.accuracy`, one line per
     grid on stderr as it is done."""
+    from ..nlp.options import SolverOptions
     from ..solve import solve_to_accuracy
 
     d, s = f.discretization, f.solver
@@ -90,7 +91,8 @@ def _solve_to_accuracy(problem: Any, f: Any, quiet: bool) -> Any:
             progress=spinner.update if spinner is not None else silent,
             report=silent if quiet else lambda level: err.print(grid_line(level),
                                                                  highlight=False),
-            jit=s.jit, backend=s.backend, max_seconds=s.max_seconds)
+            jit=s.jit, backend=s.backend, max_seconds=s.max_seconds,
+            options=SolverOptions(workers=s.workers))
 
 
 def _solve_outputs(out_path: Optional[Path], plot_path: Optional[Path],

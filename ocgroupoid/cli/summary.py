@@ -32,6 +32,14 @@ def summary(sol: Any) -> Table:
     if sol.ipopt_seconds_total > sol.solve_seconds * (1 + 1e-9) or sol.starts > 1:
         t.add_row("solver time, every run", f"{sol.ipopt_seconds_total * 1e3:.1f} ms ("
                   + (", ".join(filter(None, runs)) or "retries") + ")")
+    if "multistart" in d:
+        m = d["multistart"]
+        t.add_row("multi-start", f"{m['finished']} starts on {m['workers']} worker"
+                  f"{'s' if m['workers'] > 1 else ''}: {m['wall_seconds']:.2f} s wall, "
+                  f"{m['sequential_seconds']:.2f} s summed over the starts, best start "
+                  f"{m['best_start_seconds']:.2f} s" + (f"; {len(m['failed'])} failed in "
+                                                          "their worker" if m.get("failed")
+                                                          else ""))
     t.add_row("EL residual (max over nodes)", f"{d['euler_lagrange_residual_max']:.2e}"
               if "euler_lagrange_residual_max" in d else "none: the scheme is not variational")
     t.add_row("distance from manifold",

@@ -9,8 +9,8 @@ from typing import Optional
 import typer
 
 from .._startup import interrupt_exit_code
+from ..console import SET_HELP, err, fail, out, stopped_by
 from ..errors import OcgError
-from .console import SET_HELP, err, fail, out, stopped_by
 
 
 def sweep(

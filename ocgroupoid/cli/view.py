@@ -7,8 +7,8 @@ from typing import Optional
 
 import typer
 
+from ..console import fail, out
 from ..errors import OcgError
-from .console import fail, out
 
 
 def view(

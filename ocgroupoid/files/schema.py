@@ -194,6 +194,9 @@ class SolverSection(Strict):
         True, description="true (the default), false (the first geodesic only), or the "
         "number of perturbed starts on top of the geodesics and the model's guesses "
         f"(at most {MULTISTART_MAX})")
+    workers: Annotated[int, Field(strict=True, ge=1)] | None = Field(
+        None, description="processes the starts of a multi-start are solved on at once: "
+        "one per core when unset, 1 for one start after the other")
     continuation: list[Annotated[int, Field(strict=True, ge=2)]] = Field(
         default_factory=list, max_length=CONTINUATION_MAX,
         description=f"coarser N solved first, e.g. [16, 32] (at most {CONTINUATION_MAX})")

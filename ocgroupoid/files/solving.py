@@ -39,7 +39,7 @@ def options(cfg: Config) -> SolverOptions:
     try:
         return SolverOptions(backend=s.backend, ipopt=dict(s.ipopt), jit=s.jit,
                              max_seconds=s.max_seconds, multistart=s.multistart,
-                             continuation=tuple(s.continuation))
+                             continuation=tuple(s.continuation), workers=s.workers)
     except ConfigError as err:
         raise ConfigError(f"{cfg.locate('solver')}: {err}") from None
 

@@ -11,19 +11,9 @@ import math
 from pathlib import Path
 
 import typer
-from rich.console import Console
 
+from ..console import fail, out
 from ..errors import ConfigError
-
-out = Console()
-err = Console(stderr=True, soft_wrap=True)
-
-
-def _fail(message: str, code: int = 2) -> None:
-    from rich.markup import escape
-
-    err.print(f"[bold red]error:[/] {escape(message)}", highlight=False, markup=True)
-    raise typer.Exit(code)
 
 
 def parse_mismatch(items: list[str]) -> dict[str, float]:
@@ -90,10 +80,10 @@ def mpc_command(
         result.to_json(out_dir / "mpc.json")
         result.plot(out_dir / "mpc.png")
     except SolverError as e:
-        _fail(str(e), 1)
+        fail(str(e), 1)
         return
     except OcgError as e:
-        _fail(str(e))
+        fail(str(e))
         return
     s = result.summary()
     if not quiet:

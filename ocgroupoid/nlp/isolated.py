@@ -11,7 +11,9 @@ The caller waits for the answer until its deadline, reads what the helper prints
 (counting CasADi's "NaN detected" warnings, passing anything else on), and kills the helper
 past the deadline, after :data:`NAN_LIMIT` NaN evaluations, or when ``stop()`` says so
 (Ctrl-C); the next call forks a new helper. Where no helper can be forked (Windows) the
-work runs in-process, unguarded.
+work runs in-process, unguarded. A process forked from this one (a worker of a parallel
+multi-start, :mod:`~ocgroupoid.solve.parallel`) leaves this process's helpers alone: its
+copies forget them (:func:`_forget_helpers`) and fork their own on their first call.
 """
 
 from __future__ import annotations
@@ -124,10 +126,35 @@ def _kill(pid: int, *fds: int) -> None:
         pass
 
 
+#: every Isolated of this process, for :func:`_forget_helpers`
+_INSTANCES: weakref.WeakSet[Isolated] = weakref.WeakSet()
+
+
+def _forget_helpers() -> None:
+    """In a child just forked: every Isolated copy drops the parent's helper (closes its
+    copies of the pipes, never kills it) and forks its own on its next call."""
+    for isolated in list(_INSTANCES):
+        if isolated._finalizer is not None:
+            isolated._finalizer.detach()
+            isolated._finalizer = None
+        if isolated.pid:  # the pipes are open while a helper runs (close() ends both)
+            for fd in isolated.fds:
+                try:
+                    os.close(fd)
+                except OSError:
+                    pass
+        isolated.pid, isolated.fds = 0, (-1, -1, -1)
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_forget_helpers)
+
+
 class Isolated:
     """``work(request)`` in a helper process (module docstring)."""
 
     def __init__(self, work: Callable[[Any], Any]) -> None:
+        _INSTANCES.add(self)
         self.work = work
         self.pid = 0
         self.fds = (-1, -1, -1)  # the caller's ends: requests, answers, the helper's stderr

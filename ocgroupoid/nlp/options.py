@@ -42,7 +42,7 @@ def check_seconds(seconds: Any, what: str = "max_seconds") -> float:
 @dataclass(frozen=True, kw_only=True)
 class SolverOptions:
     """The backend and its options, compiled evaluation, the time limit of one solve and the
-    globalisation (multi-start, continuation).
+    globalisation (multi-start and its worker processes, continuation).
 
     >>> SolverOptions(backend="fatrop", ipopt={"tol": 1e-8})   # doctest: +SKIP
     """
@@ -61,6 +61,9 @@ class SolverOptions:
     multistart: bool | int = DEFAULT_MULTISTART
     #: coarser N solved first, each interpolated onto the next grid
     continuation: tuple[int, ...] = ()
+    #: the processes a multi-start solves its starts on (:mod:`~ocgroupoid.solve.parallel`):
+    #: None, one per core; 1, one start after the other in this process
+    workers: int | None = None
 
     def __post_init__(self) -> None:
         if self.backend not in BACKENDS:
@@ -80,7 +83,14 @@ class SolverOptions:
                    for n in grids):
             raise ConfigError(f"continuation lists coarser grids, integers >= 2, e.g. "
                               f"(16, 32), got {self.continuation!r}")
+        workers = self.workers
+        if workers is not None and (isinstance(workers, bool) or not isinstance(
+                workers, Integral) or workers < 1):
+            raise ConfigError(f"workers is the number of processes a multi-start solves its "
+                              f"starts on: an integer >= 1 (1: one start after the other) or "
+                              f"None (one per core), got {workers!r}")
         object.__setattr__(self, "ipopt", dict(self.ipopt))
+        object.__setattr__(self, "workers", None if workers is None else int(workers))
         object.__setattr__(self, "max_seconds", check_seconds(self.max_seconds))
         object.__setattr__(self, "continuation", tuple(int(n) for n in grids))
 

@@ -28,6 +28,7 @@ from ..nlp.watch import Listener
 from ..verify import richardson
 from ..verify.diagnostics import replay_of
 from ..verify.verdict import REPLAY_TOLERANCE, scales
+from . import parallel
 from .guesses import as_guess, geodesic_guesses, interpolate, model_guesses, perturbed_guesses
 from .interrupt import Interrupt, interruptible
 from .readout import control_ppoly, make_solution
@@ -149,7 +150,8 @@ class CompiledProblem:
         ``multistart``: True (every geodesic guess, the model's guesses and 3 perturbations;
         a further start gets :data:`START_BUDGET` iterations; the default of problem files
         and the CLI), False (the first geodesic only; the default of the options, which the
-        exported C solver shares) or the number of perturbed starts. ``continuation``:
+        exported C solver shares) or the number of perturbed starts; the starts run on
+        ``options.workers`` processes (:mod:`~ocgroupoid.solve.parallel`). ``continuation``:
         coarser N solved first, in order; the last of them gives the Solution a Richardson
         estimate of its cost error (:attr:`Solution.error_estimate`); both default to the
         solver options'. ``replay``: drive the controls
@@ -180,6 +182,7 @@ class CompiledProblem:
         if any(n >= self.disc.N for n in levels):
             raise ConfigError(f"continuation grids must be coarser than N={self.disc.N}: {levels}")
         results: list[RawResult] = []
+        multi: dict[str, Any] = {}  # diagnostics["multistart"]
         given = guess
         prev: tuple[Transcription, RawResult] | None = None
         coarse = prev  # the grid solved before the last one (continuation)
@@ -197,23 +200,9 @@ class CompiledProblem:
                     starts = [as_guess(given, tr, p)]
                 else:
                     starts = self.guesses(tr, p, multistart)
-                level: list[RawResult] = []
-                budget: int | None = None  # iterations of a further start
-                for i, g in enumerate(starts):
-                    where = f"N={n}: start {i + 1}/{len(starts)} ({g.label})"
-                    progress(where)
-                    r = tr.solve(g, p, _listener(where, progress, interrupt, budget, deadline),
-                                 deadline, lambda: interrupt.requested)
-                    if r.status == "User_Requested_Stop" and time.monotonic() > deadline:
-                        r = replace(r, status=TIMED_OUT)
-                    level.append(r)
-                    self._spent += r.solve_seconds
-                    if interrupt.requested or time.monotonic() > deadline:
-                        break
-                    if i == 0 and level[0].success:
-                        budget = max(START_BUDGET[0], START_BUDGET[1] * level[0].iterations)
+                level, report = self._starts(tr, starts, p, progress, interrupt, deadline)
                 if prev is None:
-                    results = level
+                    results, multi = level, report
                 best = min(level, key=lambda r: (not r.success, r.cost))
                 if prev is not None and not interrupt.requested and \
                         _higher(best, prev[1], CONTINUATION_GAP):
@@ -242,6 +231,8 @@ class CompiledProblem:
                     filter(None, [why, solution.hint])))
                 solution.diagnostics["verdict"]["verified"] = False
                 solution.diagnostics["verdict"]["failures"].append(why)
+        if multi["starts"] > 1:
+            solution.diagnostics["multistart"] = multi
         if notes:
             solution.diagnostics["continuation"] = notes
             solution = replace(solution, hint="; ".join([*notes, *filter(None, [solution.hint])]))
@@ -252,6 +243,47 @@ class CompiledProblem:
                 best.cost, coarse[1].cost, tr.N, coarse[0].N, order, order)
         return replace(solution, starts=len(results),
                        ipopt_seconds_total=self._spent)
+
+    def _starts(self, tr: Transcription, starts: list[Guess], p: np.ndarray,
+                progress: Progress, interrupt: Interrupt, deadline: float
+                ) -> tuple[list[RawResult], dict[str, Any]]:
+        """The starts of one grid, in order, on worker processes (``options.workers``,
+        :mod:`~ocgroupoid.solve.parallel`) or in turn, each after the first with
+        :data:`START_BUDGET` iterations; none started after Ctrl-C or the deadline. With
+        ``diagnostics["multistart"]``: the starts asked for and finished, the workers, the
+        wall time of all, the sum of their solver times, and the best start's."""
+        t0 = time.perf_counter()
+        workers, why = parallel.plan(self.options.workers, len(starts))
+
+        def where(i: int) -> str:
+            return f"N={tr.N}: start {i + 1}/{len(starts)} ({starts[i].label})"
+
+        failed: list[dict[str, Any]] = []
+        if workers > 1:
+            level, failed = parallel.run(tr, starts, p, workers, where, progress, interrupt,
+                                         deadline, START_BUDGET, PROGRESS_EVERY)
+        else:
+            level = []
+            budget: int | None = None  # iterations of a further start
+            for i, g in enumerate(starts):
+                progress(where(i))
+                r = tr.solve(g, p, _listener(where(i), progress, interrupt, budget, deadline),
+                             deadline, lambda: interrupt.requested)
+                if r.status == "User_Requested_Stop" and time.monotonic() > deadline:
+                    r = replace(r, status=TIMED_OUT)
+                level.append(r)
+                if interrupt.requested or time.monotonic() > deadline:
+                    break
+                if i == 0 and level[0].success:
+                    budget = max(START_BUDGET[0], START_BUDGET[1] * level[0].iterations)
+        spent = sum(r.solve_seconds for r in level)
+        self._spent += spent
+        best = min(level, key=lambda r: (not r.success, r.cost))
+        report = {"starts": len(starts), "finished": len(level), "workers": workers,
+                  "wall_seconds": time.perf_counter() - t0, "sequential_seconds": spent,
+                  "best_start_seconds": best.solve_seconds}
+        return level, {**report, **({"note": why} if why else {}),
+                       **({"failed": failed} if failed else {})}
 
     def _bridge(self, prev: tuple[Transcription, RawResult], n: int, landed: RawResult,
                 params: dict[str, Any] | None, initial: dict[str, Any] | None,

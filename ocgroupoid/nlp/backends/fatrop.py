@@ -39,8 +39,15 @@ SHARED_OPTIONS = ("tol", "max_iter", "mu_init", "bound_push", "bound_frac", "con
 #: zero multipliers, not least-squares ones) is fatrop's lam_max 0 (measured on so3, N = 256:
 #: 7 -> 4 iterations, as IPOPT's; the other problem files unchanged)
 RENAMED_OPTIONS = {"constr_mult_init_max": "lam_max"}
-#: what a failed fatrop solve reports (its return flag is 1 for every failure)
+#: what a failed fatrop solve reports where IPOPT has no name for the reason
 FAILED = "Fatrop_Failed"
+#: fatrop's return flags (``stats()["fatrop"]["return_flag"]``, its ``IpSolverReturnFlag``)
+#: by IPOPT's name for the same outcome; CasADi counts only flag 0 as success, so a stop at
+#: an acceptable point (flag 2: the error below ``tol_acceptable`` for ``acceptable_iter``
+#: iterations, not below ``tol``) is not one, as IPOPT's is not for the verdict
+#: (:mod:`~ocgroupoid.verify.verdict`) and the policy runs IPOPT after it
+STATUS = {0: "Solve_Succeeded", 1: "Maximum_Iterations_Exceeded",
+          2: "Solved_To_Acceptable_Level", 3: "Infeasible_Problem_Detected"}
 #: fatrop relaxes every inequality bound by this factor, as IPOPT's default
 #: ``bound_relax_factor`` (``lb - eps max(1, |lb|)``), and has no option to turn it off: the
 #: bounds it is given are tightened by as much, so that they hold at the solution to
@@ -169,8 +176,7 @@ class FatropBackend(Backend):
         seconds = time.perf_counter() - t0
         stats = self.solver.stats()
         success, iterations = bool(stats["success"]), int(stats["iter_count"])
-        status = "Solve_Succeeded" if success else \
-            "Maximum_Iterations_Exceeded" if iterations >= self.max_iter else FAILED
+        status = STATUS.get(int(stats["fatrop"]["return_flag"]), FAILED)
         return Run(sf.x_of(np.array(r["x"])), float(r["f"]),
                             sf.rows_x(np.array(r["lam_g"])), sf.x_of(np.array(r["lam_x"])),
                             status, success, iterations, seconds)

@@ -1,5 +1,6 @@
-"""What every command of the ``ocgroupoid`` command line shares: the two consoles, the
-one-line failure, the spinner and the word for how a run was stopped."""
+"""What every command of the ``ocgroupoid`` command line shares (``cli``, and the ``bench``
+and ``mpc`` commands registered on it): the two consoles, the one-line failure, the spinner
+and the word for how a run was stopped."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ from typing import Any
 import typer
 from rich.console import Console
 
-from .._startup import terminated
+from ._startup import terminated
 
 out = Console()
 err = Console(stderr=True, soft_wrap=True)

@@ -1,0 +1,298 @@
+"""Multi-start in parallel: the starts of one grid solved by worker processes on the cores.
+
+**Processes, not threads.** CasADi holds Python's GIL through an IPOPT solve: two starts of
+``quadrotor.yaml`` (N = 64) in two threads, each with its own nlpsol, took 0.95-1.1 s against
+0.9-1.0 s one after the other. Starts overlap only in separate processes.
+
+**How the solver gets into a worker.** The workers are forked from the solving process once
+per multi-start, so each holds the compiled :class:`~ocgroupoid.nlp.transcription.Transcription`
+as it is: its nlpsol instances, the iteration callback, the libraries ``solver.jit`` loaded
+and any Python hook of the problem, for the price of a fork (15-25 ms each, measured). The
+alternatives cost more and cover less: serialising IPOPT's nlpsol Function took 0.11 s, its
+11 MB through a pipe and 0.13 s to deserialise, and the iteration callback (a Python object)
+has to be rebuilt beside it; rebuilding the transcription from the problem took 0.34 s, and a
+problem holding CasADi SX expressions or Python hooks does not pickle in general. A worker's
+copy of a fatrop backend forks its own helper (:mod:`~ocgroupoid.nlp.isolated`). Only the
+start (its guess and the parameters) goes to a worker and only its
+:class:`~ocgroupoid.nlp.transcription.RawResult` comes back.
+
+**The same result as one start after the other.** Starts are handed out in their order and
+reported in it, whatever order they finish in. The iteration budget of a further start
+(``START_BUDGET`` of :mod:`~ocgroupoid.solve.compiled`, a multiple of the first start's
+iterations) is kept exactly: a further start that reaches the smallest budget before the first
+start has finished waits for it, then goes on or stops at the same iteration as it would have
+in turn. So every start runs the same iterations from the same point, and the best start,
+the distinct minima and the verdict are the sequential path's.
+
+**No early stop.** Nothing stops a running start because another one did well: IPOPT's
+iterates of a nonconvex NLP give no lower bound on the cost a start will end at (an
+infeasible iterate's objective says nothing, and the objective of a feasible one may still
+fall below any other start's), and a local solver never certifies a minimum as the best. A
+criterion that stopped starts early could drop the best minimum, so there is none; the
+iteration budget is the only limit, as in turn.
+
+**Ctrl-C, the deadline and failures.** The workers ignore SIGINT; the solving process, which
+catches it (:mod:`~ocgroupoid.solve.interrupt`), or its deadline sets a stop event that every
+worker's iteration callback (and fatrop's ``stop()``) reads: the running starts end at their
+next iteration and come back, the starts not handed out are skipped, as in turn. A start that
+raises in its worker, or whose worker dies, is reported as a failed start (status
+:data:`WORKER_FAILED`, the error in the report) and the others go on.
+"""
+
+from __future__ import annotations
+
+import multiprocessing as mp
+import os
+import signal
+import threading
+import time
+import warnings
+from dataclasses import dataclass, replace
+from multiprocessing.connection import Connection, wait
+from typing import Any, Callable, Sequence
+
+import numpy as np
+
+from ..nlp.backends import TIMED_OUT, IpoptBackend
+from ..nlp.program import Guess
+from ..nlp.transcription import RawResult, Transcription
+from .interrupt import Interrupt
+
+#: the status of a start that raised in its worker process or lost it
+WORKER_FAILED = "Worker_Failed"
+#: a further start's budget before the first start has finished, and when it has none
+_UNKNOWN, _UNLIMITED = -2, -1
+#: seconds between two looks at Ctrl-C, the deadline and the workers
+POLL = 0.05
+#: seconds the workers get to stop at their next iteration before they are killed
+GRACE = 5.0
+
+
+def cores() -> int:
+    """The cores this process may run on."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
+
+
+def plan(workers: int | None, starts: int) -> tuple[int, str]:
+    """The worker processes for ``starts`` starts (1: in turn, in this process) and, when
+    more were asked for than can run, why. ``workers`` None (the default) means one per core,
+    and in turn away from the main thread (a host that runs threads, such as a Dask worker,
+    keeps its cores); never more than the starts."""
+    want = min(cores() if workers is None else workers, starts)
+    if want < 2:
+        return 1, ""
+    if workers is None and threading.current_thread() is not threading.main_thread():
+        return 1, ""
+    if "fork" not in mp.get_all_start_methods():
+        return 1, "in turn: this system cannot fork worker processes"
+    if mp.current_process().daemon:
+        return 1, "in turn: a daemonic process (a worker of a pool) cannot start workers"
+    return want, ""
+
+
+@dataclass(frozen=True)
+class _Shared:
+    """What every worker reads: the stop event, the further starts' budget (shared int), the
+    budget rule (minimum, multiple of the first start's iterations), the seconds between two
+    progress messages and the solving process's pid (a worker whose parent is gone ends)."""
+
+    stop: Any
+    budget: Any
+    rule: tuple[int, int]
+    every: float
+    parent: int
+
+
+def _listener(conn: Connection, i: int, deadline: float, shared: _Shared,
+              waited: list[float]) -> Callable[[int, float, float], bool]:
+    """A worker's iteration callback: progress to the solving process at most every
+    ``shared.every`` seconds; stop on the stop event, past the deadline, or at the budget of a
+    further start, waiting at the smallest budget until the first start has set it (the
+    seconds waited added to ``waited[0]``: not the start's solver time)."""
+    last = [time.perf_counter()]
+
+    def stopped() -> bool:
+        return shared.stop.is_set() or time.monotonic() > deadline or \
+            os.getppid() != shared.parent
+
+    def listen(iteration: int, objective: float, infeasibility: float) -> bool:
+        now = time.perf_counter()
+        if now - last[0] >= shared.every:
+            last[0] = now
+            conn.send(("progress", i, (iteration, objective, infeasibility)))
+        if stopped():
+            return True
+        if i == 0 or iteration < shared.rule[0]:
+            return False
+        t0 = time.perf_counter()
+        try:
+            while shared.budget.value == _UNKNOWN:  # the first start is still running
+                time.sleep(POLL / 10)
+                if stopped():
+                    return True
+        finally:
+            waited[0] += time.perf_counter() - t0
+        budget = shared.budget.value
+        return budget != _UNLIMITED and iteration >= budget
+
+    return listen
+
+
+def _serve(conn: Connection, tr: Transcription, shared: _Shared) -> None:
+    """A worker's loop: solve each start sent, answer ``done`` with its result or ``error``
+    with what it raised; end on None, or when the solving process is gone."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the solving process's
+    while True:
+        while not conn.poll(1.0):
+            if os.getppid() != shared.parent:
+                return
+        task = conn.recv()
+        if task is None:
+            return
+        i, guess, p, deadline = task
+        waited = [0.0]
+        try:
+            r = tr.solve(guess, p, _listener(conn, i, deadline, shared, waited), deadline,
+                         shared.stop.is_set)
+            conn.send(("done", i, replace(r, solve_seconds=r.solve_seconds - waited[0])))
+        except Exception as err:  # noqa: BLE001  (reported as a failed start)
+            conn.send(("error", i, f"{type(err).__name__}: {err}"))
+
+
+def _failed(tr: Transcription, guess: Guess, p: np.ndarray, why: str) -> RawResult:
+    """The result of a start that failed in its worker: its start point, no cost."""
+    x0 = guess.x if guess.x is not None and guess.x.size == tr.nx else tr.point(guess, p)
+    return RawResult(guess.label, np.asarray(x0, dtype=float), p, np.zeros(tr.ng),
+                     float("inf"), WORKER_FAILED, False, 0, 0.0, np.zeros(tr.nx))
+
+
+def run(tr: Transcription, starts: Sequence[Guess], p: np.ndarray, workers: int,
+        where: Callable[[int], str], progress: Callable[[str], None], interrupt: Interrupt,
+        deadline: float, rule: tuple[int, int], every: float
+        ) -> tuple[list[RawResult], list[dict[str, Any]]]:
+    """Solve ``starts`` on ``workers`` forked processes (module docstring): the results of
+    the starts that ran, in their order, and the starts that failed in a worker (number from
+    1, label, error). ``where(i)`` names start i for ``progress``, which hears each start as
+    it is handed out and as it finishes, and the workers' iterations; ``rule`` is the
+    further starts' iteration budget, ``every`` the seconds between two progress messages
+    of a start."""
+    ctx = mp.get_context("fork")
+    for backend in tr.backends:  # IPOPT's instance with the iteration callback, built once
+        if isinstance(backend, IpoptBackend):  # here for every worker (else in each)
+            backend.watched_solver  # noqa: B018
+    shared = _Shared(ctx.Event(), ctx.RawValue("q", _UNKNOWN), rule, every, os.getpid())
+    conns: list[Connection] = []
+    procs: list[Any] = []
+    failed: list[dict[str, Any]] = []
+    with warnings.catch_warnings():  # a multi-threaded caller: the workers have one thread
+        warnings.simplefilter("ignore", DeprecationWarning)
+        for _ in range(workers):
+            mine, theirs = ctx.Pipe()
+            proc = ctx.Process(target=_serve, args=(theirs, tr, shared), daemon=True)
+            proc.start()
+            theirs.close()
+            conns.append(mine)
+            procs.append(proc)
+    results: dict[int, RawResult] = {}
+    todo = list(range(len(starts)))
+    running: dict[int, int] = {}  # worker -> the start it solves
+
+    def fail(i: int, why: str) -> None:
+        results[i] = _failed(tr, starts[i], p, why)
+        failed.append({"start": i + 1, "label": starts[i].label, "error": why})
+        progress(f"{where(i)}: failed in its worker ({why})")
+
+    try:
+        while todo or running:
+            alive = [w for w, proc in enumerate(procs) if proc.is_alive()]
+            for w in alive:
+                if w not in running and todo:
+                    i = todo.pop(0)
+                    progress(where(i))
+                    running[w] = i
+                    try:
+                        conns[w].send((i, starts[i], p, deadline))
+                    except OSError:  # it died: its sentinel says so below
+                        pass
+            if not alive:  # every worker died: what is left cannot run
+                for i in todo:
+                    fail(i, "not run: every worker process died")
+                todo.clear()
+            if interrupt.requested or time.monotonic() > deadline:  # the first start ran
+                shared.stop.set()
+                todo.clear()
+            ready = wait([conns[w] for w in running] + [procs[w].sentinel for w in running],
+                         POLL)
+            for w in list(running):
+                if conns[w] in ready or procs[w].sentinel in ready:
+                    _receive(w, conns[w], procs[w], running, results, shared, fail, where,
+                             progress, deadline, len(starts))
+    finally:
+        _stop(shared, conns, procs)
+    return [results[i] for i in sorted(results)], failed
+
+
+def _receive(w: int, conn: Connection, proc: Any, running: dict[int, int],
+             results: dict[int, RawResult], shared: _Shared, fail: Callable[[int, str], None],
+             where: Callable[[int], str], progress: Callable[[str], None], deadline: float,
+             total: int) -> None:
+    """Read what worker w sent: progress, its start's result or error; or see it dead."""
+    i = running[w]
+    while conn.poll():
+        try:
+            kind, j, value = conn.recv()
+        except (EOFError, OSError):
+            break
+        if kind == "progress":
+            iteration, objective, infeasibility = value
+            progress(f"{where(j)}: iteration {iteration}, objective {objective:.6g}, "
+                     f"infeasibility {infeasibility:.1e}")
+            continue
+        del running[w]
+        if kind == "error":
+            fail(j, value)
+        else:
+            r: RawResult = value
+            if r.status == "User_Requested_Stop" and time.monotonic() > deadline:
+                r = replace(r, status=TIMED_OUT)
+            results[j] = r
+            progress(f"{len(results)}/{total} starts done; {where(j)}: {r.status}")
+        _settle(shared, j, results.get(j))
+        return
+    if not proc.is_alive():
+        del running[w]
+        code = proc.exitcode
+        fail(i, "its worker process died (" + (f"signal {-code}" if code is not None and
+                                                code < 0 else f"exit code {code}") + ")")
+        _settle(shared, i, None)
+
+
+def _settle(shared: _Shared, i: int, r: RawResult | None) -> None:
+    """Once the first start has ended: the further starts' budget, a multiple of its
+    iterations when it solved (none when it failed), as in turn."""
+    if i == 0:
+        shared.budget.value = _UNLIMITED if r is None or not r.success else \
+            max(shared.rule[0], shared.rule[1] * r.iterations)
+
+
+def _stop(shared: _Shared, conns: list[Connection], procs: list[Any]) -> None:
+    """End the workers: stop their starts, tell them to end, kill those still running after
+    :data:`GRACE` seconds."""
+    shared.stop.set()
+    for conn, proc in zip(conns, procs):
+        if proc.is_alive():
+            try:
+                conn.send(None)
+            except OSError:
+                pass
+    end = time.monotonic() + GRACE
+    for proc in procs:
+        proc.join(max(0.0, end - time.monotonic()))
+        if proc.is_alive():
+            proc.kill()
+            proc.join()
+    for conn in conns:
+        conn.close()

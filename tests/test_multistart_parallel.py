@@ -1,0 +1,154 @@
+"""Multi-start on worker processes (:mod:`ocgroupoid.solve.parallel`): the same result as the
+starts in turn, the workers option checked, a start that fails in its worker reported."""
+
+from __future__ import annotations
+
+import os
+
+import pytest
+
+import ocgroupoid as og
+from ocgroupoid.errors import ConfigError
+from ocgroupoid.nlp.transcription import Transcription
+from ocgroupoid.solve import parallel
+from ocgroupoid.systems.heavy_top import heavy_top
+from ocgroupoid.systems.rigid_body import rigid_body
+
+pytestmark = pytest.mark.skipif("fork" not in __import__("multiprocessing")
+                                .get_all_start_methods(), reason="workers are forked")
+
+
+@pytest.mark.parametrize("factory, N, starts", [(rigid_body, 16, 3), (heavy_top, 32, 2)])
+def test_parallel_gives_the_sequential_result(factory, N: int, starts: int) -> None:
+    """Same best start and cost, same distinct minima, same verdict, starts in order."""
+    problem = factory()
+    one = og.compile_problem(problem, N=N, workers=1).solve(multistart=starts)
+    two = og.compile_problem(problem, N=N, workers=2).solve(multistart=starts)
+    assert one.diagnostics["multistart"]["workers"] == 1
+    assert two.diagnostics["multistart"]["workers"] == 2
+    assert two.success == one.success and two.status == one.status
+    assert two.discretization["start"] == one.discretization["start"]
+    assert two.cost == pytest.approx(one.cost, rel=1e-9)
+    assert [m["label"] for m in two.minima] == [m["label"] for m in one.minima]
+    assert [m["cost"] for m in two.minima] == pytest.approx([m["cost"] for m in one.minima],
+                                                            rel=1e-9)
+    assert two.iterations == one.iterations and two.starts == one.starts
+    report = two.diagnostics["multistart"]
+    assert report["starts"] == report["finished"] == two.starts
+    assert report["sequential_seconds"] == pytest.approx(two.ipopt_seconds_total)
+    assert 0 < report["best_start_seconds"] <= report["sequential_seconds"]
+    assert not __import__("multiprocessing").active_children()  # the workers ended
+
+
+@pytest.mark.parametrize("workers", [0, -1, 1.5, True, "2"])
+def test_workers_are_checked(workers) -> None:
+    with pytest.raises(ConfigError, match="workers is the number of processes"):
+        og.SolverOptions(workers=workers)
+    with pytest.raises(ConfigError, match="an integer >= 1"):
+        og.compile_problem(rigid_body(), N=8, workers=workers)
+
+
+def test_plan() -> None:
+    """Never more workers than starts; one start, or workers=1, runs in turn."""
+    assert parallel.plan(4, 1) == (1, "")
+    assert parallel.plan(1, 9) == (1, "")
+    assert parallel.plan(8, 3)[0] == 3
+    assert parallel.plan(None, 9)[0] == min(parallel.cores(), 9)
+
+
+def test_a_start_that_fails_in_its_worker_is_reported(monkeypatch) -> None:
+    """One start raises in its worker, another's worker dies: both are reported as failed
+    starts, the others finish and the best of them is returned."""
+    solve = Transcription.solve
+
+    def faulty(self, guess, *args, **kwargs):
+        if guess.label == "perturbed 1":
+            raise RuntimeError("broken start")
+        if guess.label == "perturbed 2":
+            os._exit(3)
+        return solve(self, guess, *args, **kwargs)
+
+    monkeypatch.setattr(Transcription, "solve", faulty)  # the forked workers inherit it
+    progress: list[str] = []
+    sol = og.compile_problem(rigid_body(), N=16, workers=2).solve(multistart=3,
+                                                         progress=progress.append)
+    failed = {f["label"]: f["error"] for f in sol.diagnostics["multistart"]["failed"]}
+    assert failed["perturbed 1"] == "RuntimeError: broken start"
+    assert "died (exit code 3)" in failed["perturbed 2"]
+    assert sol.success and sol.starts == 5 and sol.diagnostics["multistart"]["finished"] == 5
+    assert any("starts done" in line for line in progress)
+    assert any("failed in its worker" in line for line in progress)
+
+
+def test_a_further_start_waits_for_the_first_starts_budget() -> None:
+    """At the smallest budget a further start waits until the first start has set it, then
+    stops where it would have in turn; the first start has none."""
+    import multiprocessing
+    import threading
+    import time
+
+    ctx = multiprocessing.get_context("fork")
+    shared = parallel._Shared(ctx.Event(), ctx.RawValue("q", parallel._UNKNOWN), (30, 3),
+                              1e9, os.getppid())  # as a worker sees its parent
+    sent: list = []
+    conn = type("Conn", (), {"send": lambda self, m: sent.append(m)})()
+    waited = [0.0]
+    first = parallel._listener(conn, 0, time.monotonic() + 60, shared, waited)
+    further = parallel._listener(conn, 1, time.monotonic() + 60, shared, waited)
+    assert not first(200, 1.0, 0.0) and not further(29, 1.0, 0.0)
+    timer = threading.Timer(0.2, lambda: setattr(shared.budget, "value", 45))
+    timer.start()
+    t0 = time.perf_counter()
+    assert not further(30, 1.0, 0.0)  # waited for the first start
+    assert time.perf_counter() - t0 >= waited[0] >= 0.15  # not counted as solver time
+    assert not further(44, 1.0, 0.0) and further(45, 1.0, 0.0)
+    shared.budget.value = parallel._UNLIMITED
+    assert not further(1000, 1.0, 0.0)
+    shared.stop.set()
+    assert first(1, 1.0, 0.0) and further(1, 1.0, 0.0)
+
+
+def test_ctrl_c_stops_the_workers_with_the_best_point_so_far() -> None:
+    """SIGINT to the solving process: the workers stop at their next iteration and end,
+    the starts not handed out are skipped, status interrupted."""
+    import multiprocessing
+    import signal
+    import threading
+
+    solver = og.compile_problem(heavy_top(), N=128, workers=2)
+    before = signal.getsignal(signal.SIGINT)
+    timer = threading.Timer(0.5, lambda: os.kill(os.getpid(), signal.SIGINT))
+    timer.start()
+    try:
+        sol = solver.solve(multistart=12)
+    finally:
+        timer.cancel()
+    assert sol.status == "interrupted" and not sol.success
+    assert sol.starts < sol.diagnostics["multistart"]["starts"]
+    assert not multiprocessing.active_children()  # the workers are gone
+    assert signal.getsignal(signal.SIGINT) is before
+
+
+def test_problem_files_and_the_cli_set_the_workers(tmp_path) -> None:
+    """``solver.workers`` of a problem file reaches the options (checked as they are); the
+    summary of ``ocgroupoid solve`` shows the multi-start's workers and times."""
+    from pathlib import Path
+
+    from typer.testing import CliRunner
+
+    from ocgroupoid.cli import app
+    from ocgroupoid.files.load import load
+    from ocgroupoid.files.solving import options
+
+    so3 = Path(__file__).resolve().parent.parent / "problems" / "so3_rest_to_rest.yaml"
+    assert options(load(so3, ["solver.workers=1"])).workers == 1
+    assert options(load(so3)).workers is None
+    with pytest.raises(ConfigError, match="workers"):
+        load(so3, ["solver.workers=0"])
+    out = tmp_path / "sol.json"
+    r = CliRunner().invoke(app, ["solve", str(so3), "--set", "horizon.N=16",
+                                 "--set", "solver.workers=2", "--out", str(out)])
+    assert r.exit_code == 0, r.output
+    assert "multi-start" in r.output  # the summary's row (its text wraps with the terminal)
+    report = og.Solution.from_json(out).diagnostics["multistart"]
+    assert report["workers"] == 2 and report["finished"] == report["starts"] > 1
