@@ -45,13 +45,13 @@ from .solve import CompiledProblem, Solution, compile_problem, solve, solve_to_a
 from .sweep import sweep  # Dask, pandas and pyarrow are imported when a sweep runs
 
 #: the names of earlier releases, still answered with a DeprecationWarning (:func:`__getattr__`)
-_RENAMED = {"compile_problem": "compile_problem", "CompiledProblem": "CompiledProblem"}
+_RENAMED = {"compile": "compile_problem", "Solver": "CompiledProblem"}
 
 
 def __getattr__(name: str) -> Any:
-    """``og.compile_problem`` and ``og.CompiledProblem``, the names of earlier releases: the same objects as
-    ``og.compile_problem`` and ``og.CompiledProblem``, with a DeprecationWarning (``compile_problem``
-    shadowed Python's builtin; ``CompiledProblem`` was not the IPOPT or fatrop solver but a compiled
+    """``og.compile`` and ``og.Solver``, the names of earlier releases: the same objects as
+    ``og.compile_problem`` and ``og.CompiledProblem``, with a DeprecationWarning (``compile``
+    shadowed Python's builtin; ``Solver`` was not the IPOPT or fatrop solver but a compiled
     problem)."""
     if name in _RENAMED:
         new = _RENAMED[name]

@@ -7,8 +7,8 @@ import pytest
 import ocgroupoid as og
 
 
-@pytest.mark.parametrize(("old", "new"), [("compile_problem", "compile_problem"),
-                                          ("CompiledProblem", "CompiledProblem")])
+@pytest.mark.parametrize(("old", "new"), [("compile", "compile_problem"),
+                                          ("Solver", "CompiledProblem")])
 def test_old_name_warns_and_is_the_new_object(old: str, new: str) -> None:
     with pytest.warns(DeprecationWarning, match=f"og.{old} is now og.{new}"):
         assert getattr(og, old) is getattr(og, new)
