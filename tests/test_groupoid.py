@@ -263,8 +263,8 @@ def test_stored_state_round_trips(f, seed: int) -> None:
     M = f.matrix(s)
     assert f.distance(s) <= 1e-12
     assert np.allclose(f.parse_state(M), s, atol=1e-12)
-    assert np.allclose(np.asarray(f.shown(s)).reshape(f.shown_shape), M, atol=1e-15)
-    rot = f.state_size - (f.algebra_dim - len(range(f.algebra_dim)[f.group.turning]))
+    assert np.allclose(np.asarray(f.as_matrix(s)).reshape(f.matrix_shape), M, atol=1e-15)
+    rot = f.state_size - (f.algebra_dim - len(range(f.algebra_dim)[f.group.angular]))
     scaled = s.copy()
     scaled[:rot] *= -3.0
     assert np.allclose(np.asarray(f.pack_target(scaled)).ravel(), s, atol=1e-15)
@@ -274,7 +274,7 @@ def test_stored_state_round_trips(f, seed: int) -> None:
 
 def test_group_factor_words_and_sizes() -> None:
     """What messages and parameter files say of each group's states."""
-    words = [(f.manifold, f.value_kind, f.state_size, f.state_dim, f.shown_shape)
+    words = [(f.manifold, f.value_kind, f.state_size, f.state_dim, f.matrix_shape)
              for f in GROUP_FACTORS[::2]]
     assert words == [("SO(3)", "rotation", 4, 3, (3, 3)), ("SE(3)", "pose", 7, 6, (4, 4)),
                      ("SE(2)", "pose", 4, 3, (3, 3))]

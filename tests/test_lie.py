@@ -33,7 +33,7 @@ class Case:
         return f"{self.group.name}-{self.name}"
 
     def algebra(self, shrink: float = 1.0) -> st.SearchStrategy[np.ndarray]:
-        return twists(self.group.dim, self.group.turning, shrink * self.radius)
+        return twists(self.group.dim, self.group.angular, shrink * self.radius)
 
 
 CASES = [Case(SO3, "cayley", 8.0, np.pi - 1e-3), Case(SO3, "exp", np.pi - 1e-3, np.pi - 1e-3),
@@ -63,7 +63,7 @@ def fd_right(G: LieGroup, tau, a: np.ndarray, b: np.ndarray, eps: float = 1e-6
 
 def rotation_size(G: LieGroup) -> int:
     """How many parameters hold the rotation (the quaternion): all but the position."""
-    return 0 if isinstance(G, Rn) else G.size - (G.dim - len(range(G.dim)[G.turning]))
+    return 0 if isinstance(G, Rn) else G.size - (G.dim - len(range(G.dim)[G.angular]))
 
 
 # ------------------------------------------------------------------ retractions
@@ -73,7 +73,7 @@ def rotation_size(G: LieGroup) -> int:
 @given(data=st.data())
 def test_tau_tau_inv_bijective(case: Case, data: st.DataObject) -> None:
     G, ret = case.group, retraction(case.name, case.group)
-    g = G.exp(data.draw(twists(G.dim, G.turning, case.angle_limit)))
+    g = G.exp(data.draw(twists(G.dim, G.angular, case.angle_limit)))
     assert np.allclose(G.matrix(ret.tau(ret.tau_inv(g))), G.matrix(g), atol=1e-11, rtol=0)
     a = data.draw(case.algebra())
     assert np.allclose(ret.tau_inv(ret.tau(a)), a, atol=1e-9 * max(1, np.linalg.norm(a)),
@@ -189,8 +189,8 @@ def test_step_norm_is_the_rotation_angle(case: Case) -> None:
     """One norm per row: |a| on SO(3) and R^n, |omega| on SE(n) (what step_limit refers to)."""
     G, ret = case.group, retraction(case.name, case.group)
     a = np.random.default_rng(2).normal(size=(5, G.dim))
-    turning = {"SE2": 1, "SE3": 3}.get(G.name, G.dim)
-    assert np.allclose(ret.step_norm(a), np.linalg.norm(a[:, :turning], axis=1))
+    angular = {"SE2": 1, "SE3": 3}.get(G.name, G.dim)
+    assert np.allclose(ret.step_norm(a), np.linalg.norm(a[:, :angular], axis=1))
 
 
 def test_cayley_singular_at_pi_says_what_to_do() -> None:
@@ -226,12 +226,12 @@ def test_first_order_is_so3_only(G: LieGroup) -> None:
 @every_group
 @given(data=st.data())
 def test_exp_log_bijective(G: LieGroup, data: st.DataObject) -> None:
-    w = data.draw(twists(G.dim, G.turning, 20.0))
+    w = data.draw(twists(G.dim, G.angular, 20.0))
     s = G.exp(w)
     g = np.asarray(G.matrix(s))
     assert G.distance_from_group(g) <= 1e-12
     assert np.allclose(G.matrix(G.exp(G.log(s))), g, atol=1e-11)
-    if isinstance(G, Rn) or np.linalg.norm(w[G.turning]) < np.pi - 1e-6:
+    if isinstance(G, Rn) or np.linalg.norm(w[G.angular]) < np.pi - 1e-6:
         assert np.allclose(G.log(s), w, atol=1e-9)
     assert np.allclose(expm(G.hat(w)), g, atol=1e-9)
 
@@ -241,7 +241,7 @@ def test_exp_log_bijective(G: LieGroup, data: st.DataObject) -> None:
 def test_maps_are_their_matrix_formulas(G: LieGroup, data: st.DataObject) -> None:
     """exp, log, cay, cay_inv and Ad on parameters are the oracles' on matrices."""
     oracle = ORACLES[G.name]
-    x = data.draw(twists(G.dim, G.turning, np.pi - 1e-3))
+    x = data.draw(twists(G.dim, G.angular, np.pi - 1e-3))
     for f, f_matrix in ((G.exp, oracle.exp), (G.cay, oracle.cay)):
         s = f(x)
         assert np.allclose(G.matrix(s), f_matrix(x), atol=1e-12)
@@ -282,7 +282,7 @@ def test_so3_hat_is_the_cross_product() -> None:
 def test_adjoint(G: LieGroup, data: st.DataObject) -> None:
     """g hat(x) g^{-1} = hat(Ad_g x), Ad_g ad_x Ad_g^{-1} = ad_{Ad_g x} and
     Ad_{exp(x)} = exp(ad_x)."""
-    w = data.draw(twists(G.dim, G.turning, 3.0))
+    w = data.draw(twists(G.dim, G.angular, 3.0))
     x = data.draw(vectors(G.dim, 3.0))
     g, A = np.asarray(G.matrix(G.exp(w))), G.Ad(G.exp(w))
     assert np.allclose(g @ G.hat(x) @ np.linalg.inv(g), G.hat(A @ x), atol=1e-9)
@@ -294,7 +294,7 @@ def test_adjoint(G: LieGroup, data: st.DataObject) -> None:
 @given(data=st.data())
 def test_dexp_is_the_series_of_ad(G: LieGroup, data: st.DataObject) -> None:
     """The left Jacobian is ``sum_k ad_x^k/(k+1)!`` (independently of Barfoot's Q)."""
-    x = data.draw(twists(G.dim, G.turning, 3.0))
+    x = data.draw(twists(G.dim, G.angular, 3.0))
     ad = G.ad(x)
     series = sum(np.linalg.matrix_power(ad, k) / factorial(k + 1) for k in range(40))
     assert np.allclose(G.dexp(x), series, atol=1e-9)
@@ -307,7 +307,7 @@ def test_cayley_is_its_definition(G: LieGroup, data: st.DataObject) -> None:
     """``cay(x) = (I - X/2)^{-1} (I + X/2)`` and ``hat(dcay_inv(x) y) = (I - X/2) hat(y)
     (I + X/2)`` (the trivialised derivative derived by hand, independently of Kobilarov &
     Marsden's printed formula)."""
-    x, y = data.draw(twists(G.dim, G.turning, 5.0)), data.draw(vectors(G.dim, 3.0))
+    x, y = data.draw(twists(G.dim, G.angular, 5.0)), data.draw(vectors(G.dim, 3.0))
     X = G.hat(x)
     n = X.shape[0]
     assert np.allclose(G.matrix(G.cay(x)), np.linalg.solve(np.eye(n) - X / 2, np.eye(n) + X / 2),
@@ -348,7 +348,7 @@ def test_parameters_are_the_group(G: LieGroup, a: np.ndarray, b: np.ndarray, c: 
     assert np.allclose(G.matrix(G.inverse(sa)), np.linalg.inv(ga), atol=1e-12)
     assert np.allclose(G.matrix(G.exp(G.log(sa))), ga, atol=1e-11)
     assert np.allclose(G.of_matrix(ga), G.normalise(sa), atol=1e-12)
-    assert np.allclose(G.shown(sa), ga.ravel() if G.shown_shape == ga.shape else sa,
+    assert np.allclose(G.as_matrix(sa), ga.ravel() if G.matrix_shape == ga.shape else sa,
                        atol=1e-12)
     t = 1e-6
     body = (G.compose(sa, G.exp(t * c)) - G.compose(sa, G.exp(-t * c))) / (2 * t)

@@ -203,7 +203,7 @@ def model_values(tr: Transcription, default_p: np.ndarray, guess: str,
     pb, G, values = tr.problem, tr.problem.groupoid, tr.values
     state_fields, k = [], 0
     for f in G.factors:  # a shown state is a vector (rows 0) or a matrix, row-major
-        shape = f.shown_shape
+        shape = f.matrix_shape
         rows, cols = (0, shape[0]) if len(shape) == 1 else shape
         state_fields.append((f.state, k, rows, cols))
         k += int(np.prod(shape))

@@ -186,11 +186,11 @@ class Factor(ABC):
         return np.array([self.distance(s) for s in states])
 
     @property
-    def shown_shape(self) -> tuple[int, ...]:
+    def matrix_shape(self) -> tuple[int, ...]:
         """Shape of a state as users see it (a rotation: its 3 x 3 matrix)."""
         return (self.state_size,)
 
-    def shown(self, s: Array) -> Array:
+    def as_matrix(self, s: Array) -> Array:
         """A state as users see it, flattened row-major (numeric or a graph)."""
         return s
 

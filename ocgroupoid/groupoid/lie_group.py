@@ -130,17 +130,17 @@ class LieGroupFactor(Factor):
         """:meth:`distance` of every row, the matrices evaluated in one mapped call."""
         n = len(states)
         M = np.array(self._matrix.map(n)(np.asarray(states, dtype=float).T))
-        r, c = self.group.shown_shape
+        r, c = self.group.matrix_shape
         return np.array([self.group.distance_from_group(M[:, i * c:(i + 1) * c])
                          for i in range(n)])
 
     @property
-    def shown_shape(self) -> tuple[int, ...]:
-        return self.group.shown_shape
+    def matrix_shape(self) -> tuple[int, ...]:
+        return self.group.matrix_shape
 
-    def shown(self, s: Array) -> Array:
+    def as_matrix(self, s: Array) -> Array:
         """The group matrix, row-major."""
-        return self.group.shown(s)
+        return self.group.as_matrix(s)
 
     def sample_state(self, rng: np.random.Generator) -> np.ndarray:
         return self.group.sample(rng)

@@ -117,9 +117,9 @@ class Groupoid:
                             zip(self.factors, self.state_layout.slices,
                                 self.velocity_layout.slices)])
 
-    def shown(self, s: Any) -> Any:
+    def as_matrix(self, s: Any) -> Any:
         """A product state as users see it, factor by factor, flattened."""
-        return ca.vertcat(*[f.shown(s[ss]) for f, ss in
+        return ca.vertcat(*[f.as_matrix(s[ss]) for f, ss in
                             zip(self.factors, self.state_layout.slices)])
 
     @property

@@ -50,11 +50,11 @@ class LieGroup(ABC):
     dim: int  # dimension of the Lie algebra (tangent space)
     size: int  # parameters per element
     #: the algebra components that rotate, to which retractions' step limits refer
-    turning: slice = slice(None)
+    angular: slice = slice(None)
     manifold: str  # how messages name the group, e.g. "SE(3)"
     kind: str  # how a parameter file writes an element: "rotation", "pose", "vector"
     meaning: str  # one line for parameter-file documentation
-    shown_shape: tuple[int, ...]  # the matrix (or vector) users see
+    matrix_shape: tuple[int, ...]  # the matrix (or vector) users see
 
     # -- the group -------------------------------------------------------------------
 
@@ -201,7 +201,7 @@ class LieGroup(ABC):
         v = self.log(delta)
         return [("geodesic", [self.exp(v / N)]), *self.detours(delta, v, N, side)]
 
-    def shown(self, s: Array) -> Array:
+    def as_matrix(self, s: Array) -> Array:
         """The group matrix of parameters, flattened row-major."""
         return row_major(self.matrix)(s)
 

@@ -72,7 +72,7 @@ class Retraction(ABC):
     def step_norm(self, a: Any) -> np.ndarray:
         """The rotation angle of numeric steps (one per row of a), which ``step_limit``
         refers to: |a| on SO(3) and R^n, |omega| on SE(n)."""
-        return np.linalg.norm(np.asarray(a, dtype=float)[..., self.group.turning], axis=-1)
+        return np.linalg.norm(np.asarray(a, dtype=float)[..., self.group.angular], axis=-1)
 
     def __repr__(self) -> str:
         return f"{self.name}({self.group.name})"

@@ -29,7 +29,7 @@ class Rn(LieGroup):
         self.dim = self.size = n
         self.name = f"R{n}"
         self.manifold = f"R^{n}"
-        self.shown_shape = (n,)
+        self.matrix_shape = (n,)
 
     def _eye(self, like: Array) -> Array:
         return ca.DM.eye(self.dim) if is_symbolic(like) else np.eye(self.dim)
@@ -112,7 +112,7 @@ class Rn(LieGroup):
             raise ConfigError(f"an element of {self.manifold} is {self.dim} numbers, got {v.size}")
         return v
 
-    def shown(self, s: Array) -> Array:
+    def as_matrix(self, s: Array) -> Array:
         """The vector itself."""
         return s
 

@@ -122,12 +122,12 @@ class SE2Group(LieGroup):
     name = "SE2"
     dim = 3
     size = 4
-    turning = slice(0, 1)
+    angular = slice(0, 1)
     manifold = "SE(2)"
     kind = "pose"
     meaning = ("cos(a/2) sin(a/2) x y: heading a as the unit complex number of its half "
                "angle (normalised; sign free), then the position")
-    shown_shape = (3, 3)
+    matrix_shape = (3, 3)
 
     def identity(self) -> np.ndarray:
         return np.array([1.0, 0.0, 0.0, 0.0])

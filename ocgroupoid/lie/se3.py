@@ -68,11 +68,11 @@ class SE3Group(LieGroup):
     name = "SE3"
     dim = 6
     size = 7
-    turning = slice(0, 3)
+    angular = slice(0, 3)
     manifold = "SE(3)"
     kind = "pose"
     meaning = "unit quaternion w x y z then position x y z (quaternion normalised; sign free)"
-    shown_shape = (4, 4)
+    matrix_shape = (4, 4)
 
     def identity(self) -> np.ndarray:
         return np.array([1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])

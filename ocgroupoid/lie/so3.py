@@ -50,7 +50,7 @@ class SO3Group(LieGroup):
     manifold = "SO(3)"
     kind = "rotation"
     meaning = "unit quaternion w x y z (normalised; sign free)"
-    shown_shape = (3, 3)
+    matrix_shape = (3, 3)
 
     def identity(self) -> np.ndarray:
         return np.array([1.0, 0.0, 0.0, 0.0])

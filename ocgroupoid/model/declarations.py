@@ -194,8 +194,8 @@ class Declarations:
         S^2 or R^n as a vector), for costs, bounds and terminal costs: a reduced Lagrangian
         never depends on a group state, but a keep-out cone or a tracking cost may."""
         i, f = self.groupoid.by_state(name)
-        v = f.shown(self.s[self.groupoid.state_layout.slices[i]])
-        shape = f.shown_shape
+        v = f.as_matrix(self.s[self.groupoid.state_layout.slices[i]])
+        shape = f.matrix_shape
         return ca.reshape(v, shape[1], shape[0]).T if len(shape) == 2 else v  # type: ignore[return-value]  # Array = Any (lie/group.py)
 
     def state(self, name: str) -> ca.SX:

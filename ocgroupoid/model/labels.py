@@ -58,7 +58,7 @@ class Labels(Declarations):
             return "time", 1
         if name in G.state_names:
             _, f = G.by_state(name)
-            shape = f.shown_shape  # a matrix: a group element, described in its tangent
+            shape = f.matrix_shape  # a matrix: a group element, described in its tangent
             return "states", f.algebra_dim if len(shape) == 2 else int(np.prod(shape))
         if name in G.velocity_names:
             return "velocities", G.by_velocity(name)[1].algebra_dim

@@ -294,7 +294,7 @@ class NonlinearProgram:
         steps = pick(self.layout.steps[None, :]) / self.N  # 1 x N step sizes
         nodes = ca.vertcat(0, ca.cumsum(steps.T))  # node times, a column
         s = ca.SX.sym("s", G.state_size)
-        shown = ca.Function("shown", [s], [G.shown(s)])
+        shown = ca.Function("shown", [s], [G.as_matrix(s)])
         path, final = self.rows(Kind.PATH), self.rows(Kind.FINAL)
         lam_path = ca.reshape(lam[path.ravel(order="F").tolist()], *path.shape) if path.size \
             else ca.MX(0, 1)

@@ -37,8 +37,8 @@ def make_solution(tr: Transcription, r: RawResult, minima: Sequence[Any],
     shown = out["states"]
     states, k = {}, 0
     for f in G.factors:
-        n = int(np.prod(f.shown_shape))
-        states[f.state] = shown[:, k:k + n].reshape(-1, *f.shown_shape)
+        n = int(np.prod(f.matrix_shape))
+        states[f.state] = shown[:, k:k + n].reshape(-1, *f.matrix_shape)
         k += n
     velocities = {f.velocity: out["velocities"][:, vs]
                   for f, vs in zip(G.factors, G.velocity_layout.slices)}
