@@ -270,12 +270,16 @@ def main() -> None:
     Console().print(table)
     args.out.mkdir(parents=True, exist_ok=True)
     write_summary(args.out / "bench_mpc.json", {"rows": rows})
+    chart(rows, args.out / "bench_mpc.png")
+
+def chart(rows: list[dict[str, Any]], path: Path) -> None:
+    """Median ms per step of every loop, one group of bars per problem and N (log scale)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(8, 4))
+    fig, ax = plt.subplots(figsize=(10, 4))
     labels = [f"{r['problem']} N={r['N']}" for r in rows]
     bars = {"converged step": lambda r: r["converged"]["step"],
             "converged in C": lambda r: r["c"]["step"],
@@ -289,9 +293,10 @@ def main() -> None:
                                                 for r in rows], 0.1, label=label)
     ax.set_xticks(np.arange(len(rows)) + 0.35, labels)
     ax.set(ylabel="median ms per step", yscale="log", title="MPC step time")
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.0, 1.0))
     fig.tight_layout()
-    fig.savefig(args.out / "bench_mpc.png", dpi=110)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
 
 
 if __name__ == "__main__":
