@@ -58,15 +58,21 @@ def runs(problem: og.Problem, driver: Path) -> tuple[og.MpcResult, dict]:
     return og.mpc(problem, N, STEPS, mismatch=MISMATCH), json.loads(r.stdout)
 
 
-def test_c_loop_applies_pythons_controls(runs: tuple[og.MpcResult, dict]) -> None:
-    """The first 20 applied controls of C's loop are Python's to 1e-8, and so are the
-    plant's states, statuses and iterations (the warm starts work alike)."""
-    py, c = runs
+def assert_same_path(py: og.MpcResult, c: dict) -> None:
+    """The first :data:`COMPARED` applied controls and every plant state of the C loop are
+    Python's to :data:`TOL`."""
     u_py = np.array([s.control for s in py.steps])[:COMPARED]
     u_c = np.array([s["control"] for s in c["steps"]])[:COMPARED]
     assert u_c.shape == u_py.shape == (COMPARED, 3)
     assert np.max(np.abs(u_c - u_py)) <= TOL
     assert np.max(np.abs(np.array(c["trajectory"]["z"]) - py.z)) <= TOL
+
+
+def test_c_loop_applies_pythons_controls(runs: tuple[og.MpcResult, dict]) -> None:
+    """The first 20 applied controls of C's loop are Python's to 1e-8, and so are the
+    plant's states, statuses and iterations (the warm starts work alike)."""
+    py, c = runs
+    assert_same_path(py, c)
     assert [s["status"] for s in c["steps"]] == [s.status for s in py.steps]
     assert [s["iterations"] for s in c["steps"]] == [s.iterations for s in py.steps]
     assert max(s.iterations for s in py.steps[2:]) < py.steps[0].iterations  # warm
@@ -110,11 +116,7 @@ def test_c_rti_loop_applies_pythons_controls(rti_runs: tuple[str, og.MpcResult, 
     HPIPM's defaults set: export.functions.hpipm_defaults), with the same statuses; the
     settings say rti and the Hessian; the driver times the QPs."""
     hessian, py, c = rti_runs
-    u_py = np.array([s.control for s in py.steps])[:COMPARED]
-    u_c = np.array([s["control"] for s in c["steps"]])[:COMPARED]
-    assert u_c.shape == u_py.shape == (COMPARED, 3)
-    assert np.max(np.abs(u_c - u_py)) <= TOL
-    assert np.max(np.abs(np.array(c["trajectory"]["z"]) - py.z)) <= TOL
+    assert_same_path(py, c)
     assert [s["status"] for s in c["steps"]] == [s.status for s in py.steps]
     assert c["summary"]["failed_steps"] == 0 == py.failed_steps
     assert (c["settings"]["mode"], c["settings"]["qp"], c["settings"]["hessian"]) == (

@@ -9,7 +9,6 @@ import os
 import signal
 import subprocess
 import sys
-import threading
 import time
 from pathlib import Path
 
@@ -20,6 +19,8 @@ import ocgroupoid as og
 from ocgroupoid import files
 from ocgroupoid.cli import app
 from ocgroupoid.nlp import isolated
+
+from .interrupts import sigint_after
 
 ROOT = Path(__file__).resolve().parent.parent
 PROBLEMS = ROOT / "problems"
@@ -123,13 +124,9 @@ def test_fatrop_stops_on_repeated_nan_and_ipopt_solves_the_start() -> None:
 def test_ctrl_c_stops_fatrop_at_once(monkeypatch) -> None:
     monkeypatch.setattr(isolated, "NAN_LIMIT", 10 ** 9)
     solver, guess = hanging_heavy_top(max_seconds=60.0)
-    timer = threading.Timer(1.0, lambda: os.kill(os.getpid(), signal.SIGINT))
     t0 = time.perf_counter()
-    timer.start()
-    try:
+    with sigint_after(1.0):
         sol = solver.solve(guess=guess, replay=False)
-    finally:
-        timer.cancel()
     assert sol.status == "interrupted" and time.perf_counter() - t0 < 10
 
 

@@ -14,6 +14,8 @@ from ocgroupoid.solve import parallel
 from ocgroupoid.systems.heavy_top import heavy_top
 from ocgroupoid.systems.rigid_body import rigid_body
 
+from .interrupts import sigint_after
+
 pytestmark = pytest.mark.skipif("fork" not in __import__("multiprocessing")
                                 .get_all_start_methods(), reason="workers are forked")
 
@@ -113,16 +115,11 @@ def test_ctrl_c_stops_the_workers_with_the_best_point_so_far() -> None:
     the starts not handed out are skipped, status interrupted."""
     import multiprocessing
     import signal
-    import threading
 
     solver = og.compile_problem(heavy_top(), N=128, workers=2)
     before = signal.getsignal(signal.SIGINT)
-    timer = threading.Timer(0.5, lambda: os.kill(os.getpid(), signal.SIGINT))
-    timer.start()
-    try:
+    with sigint_after(0.5):
         sol = solver.solve(multistart=12)
-    finally:
-        timer.cancel()
     assert sol.status == "interrupted" and not sol.success
     assert sol.starts < sol.diagnostics["multistart"]["starts"]
     assert not multiprocessing.active_children()  # the workers are gone

@@ -4,10 +4,8 @@ grids and extreme parameters are not reported as clean successes; Ctrl-C and pro
 from __future__ import annotations
 
 import importlib
-import os
 import signal
 import sys
-import threading
 from pathlib import Path
 
 import numpy as np
@@ -19,6 +17,8 @@ from ocgroupoid.systems.heavy_top import heavy_top
 from ocgroupoid.systems.rigid_body import rigid_body
 from ocgroupoid.verify.dependencies import dependent_conditions
 from ocgroupoid.verify.verdict import check_tolerance, suggested_N
+
+from .interrupts import sigint_after
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_bounds_time import minimum_time  # noqa: E402
@@ -166,13 +166,8 @@ def test_ctrl_c_stops_the_solve_with_the_best_point_so_far() -> None:
     solver = og.compile_problem(heavy_top(), N=128)
     solver.solve(multistart=False)  # build the watched solver once
     before = signal.getsignal(signal.SIGINT)  # a pytest-xdist worker starts with SIG_IGN
-    pid = os.getpid()
-    timer = threading.Timer(0.3, lambda: os.kill(pid, signal.SIGINT))
-    timer.start()
-    try:
+    with sigint_after(0.3):
         sol = solver.solve(multistart=12)
-    finally:
-        timer.cancel()
     assert sol.status == "interrupted" and not sol.success
     assert sol.starts < 12 and np.all(np.isfinite(sol.x))
     assert signal.getsignal(signal.SIGINT) is before  # the caller's handler, restored

@@ -38,6 +38,7 @@ from ..nlp.loop import (
     plant_dynamics,
     plant_piece,
     shift_function,
+    stages_after,
     terminal_function,
     terminal_names,
     violation_function,
@@ -91,8 +92,7 @@ def functions(tr: Transcription, p: np.ndarray, prefix: str,
     G = tr.problem.groupoid
     sf = stage_form(tr.blocks, tr.nx)
     T = tr.horizon_of(p)
-    h = T / tr.N
-    sigma = sf.K * h / T + np.arange(sf.K + 1) * T / T  # Shift.sigma(h, T, T)
+    sigma = stages_after(sf.K, T / tr.N, T, T)  # the receding horizon's shift by one sample
     n = f"{prefix}gen_"
     return [plant_piece(plant_dynamics(tr), G.state_size + G.algebra_dim, k, m,
                         tr.layout.p_slices["P"].stop - tr.layout.p_slices["P"].start,
@@ -119,6 +119,7 @@ def _names(names: list[str]) -> str:
 def values(tr: Transcription, real_time: RtiFunctions | None) -> dict[str, Any]:
     """What mpc.h.in and mpc.c.in are filled with."""
     G, P = tr.problem.groupoid, tr.layout.p_slices["P"]
+    distances, terminals = distance_names(tr), terminal_names(tr)
     sizes = {"MPC_RTI": 0, "MPC_RTI_NZ": 1, "MPC_RTI_NROWS": 1, "MPC_RTI_NE": 1,
              "MPC_RTI_NNZ_H": 1, "MPC_RTI_NNZ_A": 1, "MPC_RTI_BLOCKS": "{1}",
              "MPC_RTI_MAX_BLOCK": 1, "MPC_RTI_FLOOR": repr(FLOOR)}
@@ -132,9 +133,8 @@ def values(tr: Transcription, real_time: RtiFunctions | None) -> dict[str, Any]:
                  "MPC_RTI_MAX_BLOCK": max(max(real_time.stage_sizes), 1)}
     return {"MPC_NZ": G.state_size + G.algebra_dim, "MPC_NS": G.state_size,
             "MPC_NP_PLANT": P.stop - P.start, "MPC_P_OFFSET": P.start,
-            "MPC_N_DISTANCES": len(distance_names(tr)), "MPC_N_TERMINAL": len(terminal_names(tr)),
-            "MPC_DISTANCE_NAMES": _names(distance_names(tr)),
-            "MPC_TERMINAL_NAMES": _names(terminal_names(tr)),
+            "MPC_N_DISTANCES": len(distances), "MPC_N_TERMINAL": len(terminals),
+            "MPC_DISTANCE_NAMES": _names(distances), "MPC_TERMINAL_NAMES": _names(terminals),
             "MPC_PIECE_COEFFICIENTS": max(_coefficients(tr), 1), **sizes}
 
 

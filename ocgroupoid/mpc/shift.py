@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..nlp.loop import move, parts
+from ..nlp.loop import shift, stages_after
 from ..nlp.stageform import stage_form
 from ..nlp.transcription import Transcription
 from .rti import Iterate
@@ -34,17 +34,11 @@ class Shift:
     def __init__(self, tr: Transcription) -> None:
         self.tr = tr
         self.form = stage_form(tr.blocks, tr.nx)
-        self.z_parts, self.row_parts = parts(self.form)
 
     def sigma(self, h: float, T: float, T_next: float) -> np.ndarray:
         """The fractional stage of the last point where each new stage sits."""
-        K = self.form.K
-        return K * h / T + np.arange(K + 1) * T_next / T
+        return stages_after(self.form.K, h, T, T_next)
 
     def __call__(self, it: Iterate, sigma: np.ndarray) -> Iterate:
         """The point ``it`` moved to the stages ``sigma`` (:meth:`sigma`)."""
-        sf = self.form
-        z = move(sf.z_of(it.x), self.z_parts, sigma)
-        lam_z = move(sf.z_of(it.lam_x), self.z_parts, sigma)
-        rows = move(sf.rows_z(it.lam_g), self.row_parts, sigma)
-        return Iterate(sf.x_of(z), sf.rows_x(rows), sf.x_of(lam_z))
+        return Iterate(*shift(self.form, it.x, it.lam_g, it.lam_x, sigma))

@@ -8,8 +8,8 @@ operations in the same order):
 
 * :func:`plant_piece` — the plant over one piece of the applied control polynomial:
   :data:`SUBSTEPS` classical RK4 steps of the continuous dynamics;
-* :func:`move` / :func:`shift_function` — the last primal-dual point moved along its own
-  time (:mod:`~ocgroupoid.mpc.shift` says how);
+* :func:`move`, :func:`shift`, :func:`shift_function` — the last primal-dual point moved
+  along its own time (:mod:`~ocgroupoid.mpc.shift` says how);
 * :func:`with_state_function` — a measured state ``z = (s, y)`` into the parameters' initial
   state (each factor's state packed: quaternions normalised), and :func:`initial_state`,
   the state ``z`` p starts from;
@@ -104,6 +104,12 @@ def parts(sf: StageForm) -> tuple[list[Part], list[Part]]:
             [Part(r_start, gaps), Part(r_start + gaps, ng)])
 
 
+def stages_after(K: int, h: float, T: float, T_next: float) -> np.ndarray:
+    """The fractional stage of the last point where each stage of the next sample's problem
+    sits, ``sigma_k = K h / T + k T' / T`` (:mod:`~ocgroupoid.mpc.shift`)."""
+    return K * h / T + np.arange(K + 1) * T_next / T
+
+
 def move(v: Any, parts: Sequence[Part], sigma: np.ndarray) -> Any:
     """Every stage's parts of the stage-ordered vector v (numbers, or CasADi symbols: the
     same operations) taken at the fractional stages sigma, linearly interpolated between the
@@ -128,17 +134,25 @@ def move(v: Any, parts: Sequence[Part], sigma: np.ndarray) -> Any:
     return out
 
 
-def shift_function(tr: Transcription, sf: StageForm, sigma: np.ndarray,
-                   name: str = "shift") -> ca.Function:
-    """``(x, lam_g, lam_x) -> the same moved to the stages sigma``: :func:`move` on
-    symbols (MX: the stage form picks entries of a graph), for one fixed sigma (a receding
-    horizon's)."""
+def shift(sf: StageForm, x: Any, lam_g: Any, lam_x: Any, sigma: np.ndarray
+          ) -> tuple[Any, Any, Any]:
+    """A primal-dual point in the original variables and rows (numbers or symbols) moved to
+    the stages sigma: :func:`move` on its variables and bound multipliers (the parts of z)
+    and on its constraint multipliers (the parts of the rows)."""
     z_parts, row_parts = parts(sf)
-    x, lam_g, lam_x = ca.MX.sym("x", tr.nx), ca.MX.sym("lam_g", tr.ng), ca.MX.sym("lam_x", tr.nx)
     z = move(sf.z_of(x), z_parts, sigma)
     lam_z = move(sf.z_of(lam_x), z_parts, sigma)
     rows = move(sf.rows_z(lam_g), row_parts, sigma)
-    return ca.Function(name, [x, lam_g, lam_x], [sf.x_of(z), sf.rows_x(rows), sf.x_of(lam_z)],
+    return sf.x_of(z), sf.rows_x(rows), sf.x_of(lam_z)
+
+
+def shift_function(tr: Transcription, sf: StageForm, sigma: np.ndarray,
+                   name: str = "shift") -> ca.Function:
+    """``(x, lam_g, lam_x) -> the same moved to the stages sigma``: :func:`shift` on
+    symbols (MX: the stage form picks entries of a graph), for one fixed sigma (a receding
+    horizon's)."""
+    x, lam_g, lam_x = ca.MX.sym("x", tr.nx), ca.MX.sym("lam_g", tr.ng), ca.MX.sym("lam_x", tr.nx)
+    return ca.Function(name, [x, lam_g, lam_x], list(shift(sf, x, lam_g, lam_x, sigma)),
                        ["x", "lam_g", "lam_x"], ["x_next", "lam_g_next", "lam_x_next"])
 
 

@@ -18,7 +18,6 @@ import numpy as np
 from ..errors import ConfigError
 from ..model.problem import Problem
 from ..nlp import mesh
-from ..nlp.backends import TIMED_OUT
 from ..nlp.method import Discretization, Method
 from ..nlp.options import SolverOptions
 from ..nlp.program import Guess
@@ -56,8 +55,7 @@ def _listener(where: str, progress: Progress, interrupt: Interrupt, budget: int 
         now = time.perf_counter()
         if now - last[0] >= PROGRESS_EVERY:
             last[0] = now
-            progress(f"{where}: iteration {iteration}, objective {objective:.6g}, "
-                     f"infeasibility {infeasibility:.1e}")
+            progress(parallel.iteration_line(where, iteration, objective, infeasibility))
         return interrupt.requested or (budget is not None and iteration >= budget) or \
             time.monotonic() > deadline
 
@@ -104,7 +102,7 @@ class CompiledProblem:
     :mod:`~ocgroupoid.nlp.isolated`) with status ``Maximum_WallTime_Exceeded``, the starts
     left are skipped, and the best point so far is returned.
 
-    >>> solver = compile_problem(problem, N=64)                    # doctest: +SKIP
+    >>> solver = compile_problem(problem, N=64)            # doctest: +SKIP
     >>> sol = solver.solve(params={"inertia": [2, 1, 1]})  # doctest: +SKIP
     """
 
@@ -269,13 +267,11 @@ class CompiledProblem:
                 progress(where(i))
                 r = tr.solve(g, p, _listener(where(i), progress, interrupt, budget, deadline),
                              deadline, lambda: interrupt.requested)
-                if r.status == "User_Requested_Stop" and time.monotonic() > deadline:
-                    r = replace(r, status=TIMED_OUT)
-                level.append(r)
+                level.append(parallel.timed(r, deadline))
                 if interrupt.requested or time.monotonic() > deadline:
                     break
-                if i == 0 and level[0].success:
-                    budget = max(START_BUDGET[0], START_BUDGET[1] * level[0].iterations)
+                if i == 0:
+                    budget = parallel.budget_after(level[0], START_BUDGET)
         spent = sum(r.solve_seconds for r in level)
         self._spent += spent
         best = min(level, key=lambda r: (not r.success, r.cost))

@@ -68,6 +68,26 @@ POLL = 0.05
 GRACE = 5.0
 
 
+def budget_after(first: RawResult, rule: tuple[int, int]) -> int | None:
+    """The iterations a further start gets once the first start has ended: ``rule = (a, b)``,
+    max(a, b x its iterations) when it solved, no limit (None) when it failed."""
+    return max(rule[0], rule[1] * first.iterations) if first.success else None
+
+
+def timed(r: RawResult, deadline: float) -> RawResult:
+    """``r``, its status ``TIMED_OUT`` when its listener stopped it past the deadline."""
+    if r.status == "User_Requested_Stop" and time.monotonic() > deadline:
+        return replace(r, status=TIMED_OUT)
+    return r
+
+
+def iteration_line(where: str, iteration: int, objective: float, infeasibility: float
+                   ) -> str:
+    """How progress reports one iteration of a start."""
+    return (f"{where}: iteration {iteration}, objective {objective:.6g}, "
+            f"infeasibility {infeasibility:.1e}")
+
+
 def cores() -> int:
     """The cores this process may run on."""
     try:
@@ -247,17 +267,13 @@ def _receive(w: int, conn: Connection, proc: Any, running: dict[int, int],
         except (EOFError, OSError):
             break
         if kind == "progress":
-            iteration, objective, infeasibility = value
-            progress(f"{where(j)}: iteration {iteration}, objective {objective:.6g}, "
-                     f"infeasibility {infeasibility:.1e}")
+            progress(iteration_line(where(j), *value))
             continue
         del running[w]
         if kind == "error":
             fail(j, value)
         else:
-            r: RawResult = value
-            if r.status == "User_Requested_Stop" and time.monotonic() > deadline:
-                r = replace(r, status=TIMED_OUT)
+            r: RawResult = timed(value, deadline)
             results[j] = r
             progress(f"{len(results)}/{total} starts done; {where(j)}: {r.status}")
         _settle(shared, j, results.get(j))
@@ -274,8 +290,8 @@ def _settle(shared: _Shared, i: int, r: RawResult | None) -> None:
     """Once the first start has ended: the further starts' budget, a multiple of its
     iterations when it solved (none when it failed), as in turn."""
     if i == 0:
-        shared.budget.value = _UNLIMITED if r is None or not r.success else \
-            max(shared.rule[0], shared.rule[1] * r.iterations)
+        budget = None if r is None else budget_after(r, shared.rule)
+        shared.budget.value = _UNLIMITED if budget is None else budget
 
 
 def _stop(shared: _Shared, conns: list[Connection], procs: list[Any]) -> None:
