@@ -1,15 +1,17 @@
 """The closed loop in exported C (ocgroupoid.export.mpc, DIR/mpc) against Python's og.mpc.
 
 The rigid body on SO(3) of tests/test_mpc.py (so3_rest_to_rest, N = 16, |u_i| <= 0.45),
-its plant's inertia 5 % larger, no noise, receding horizon, converged re-solves: C runs the
-same arithmetic (the Functions of ocgroupoid.nlp.loop, generated) and the same IPOPT from
-the same points, so its applied controls are Python's to 1e-8 (measured: equal to the bit;
-IPOPT's tol is the default 1e-10 in both). With --rti the C loop takes one real-time iteration
-per sample on the generated Functions of ocgroupoid.nlp.rti and HPIPM's generated QP: Python's
-og.mpc(rti=True, hessian=...). With the exact Hessian it is Python's to the bit (measured);
-with the projected one (the default) C's Jacobi rotations stand for numpy's eigh, and the QP,
-whose Hessian keeps eigenvalues down to 1e-8 of its largest entry, turns their rounding
-differences into control differences of 1.4e-9 (measured; 4.5e-9 on the free flyer).
+its plant's inertia 5 % larger, no noise, converged re-solves: C runs the same arithmetic
+(the Functions of ocgroupoid.nlp.loop, generated; the shift's fractional stages computed in
+C with stages_after's operations) and the same IPOPT from the same points, so its applied
+controls are Python's to 1e-8 (measured: equal to the bit, receding and shrinking; IPOPT's
+tol is the default 1e-10 in both). With --rti the C loop takes one real-time iteration per
+sample on the generated Functions of ocgroupoid.nlp.rti and HPIPM's generated QP: Python's
+og.mpc(rti=True, hessian=...). With the exact Hessian it is Python's to the bit (measured,
+both horizons); with the projected one (the default) C's Jacobi rotations stand for numpy's
+eigh, and the QP, whose Hessian keeps eigenvalues down to 1e-8 of its largest entry, turns
+their rounding differences into control differences of 1.4e-9 receding and 1.6e-10
+shrinking (measured; 4.5e-9 on the free flyer, receding).
 """
 
 from __future__ import annotations
@@ -59,11 +61,12 @@ def runs(problem: og.Problem, driver: Path) -> tuple[og.MpcResult, dict]:
 
 
 def assert_same_path(py: og.MpcResult, c: dict) -> None:
-    """The first :data:`COMPARED` applied controls and every plant state of the C loop are
-    Python's to :data:`TOL`."""
+    """The first :data:`COMPARED` applied controls (all, if fewer) and every plant state of
+    the C loop are Python's to :data:`TOL`."""
+    compared = min(COMPARED, len(py.steps))
     u_py = np.array([s.control for s in py.steps])[:COMPARED]
     u_c = np.array([s["control"] for s in c["steps"]])[:COMPARED]
-    assert u_c.shape == u_py.shape == (COMPARED, 3)
+    assert u_c.shape == u_py.shape == (compared, 3)
     assert np.max(np.abs(u_c - u_py)) <= TOL
     assert np.max(np.abs(np.array(c["trajectory"]["z"]) - py.z)) <= TOL
 
@@ -90,7 +93,9 @@ def test_c_loop_reaches_the_target_like_python(runs: tuple[og.MpcResult, dict]) 
     assert s["terminal_error"]["R"] < 0.05
     assert s["bound_violation_max"] <= 1e-6
     assert abs(s["tracking_error_max"] - py.tracking_error_max) <= TOL
-    assert set(py.to_dict()) - set(c) == {"bounds"}
+    assert set(py.to_dict()) == set(c)
+    assert c["bounds"] == py.bounds and len(c["bounds"]) == 3  # |u_i| <= 0.45
+    assert set(c["settings"]) - {"language"} == set(py.settings)
     assert set(py.summary()) == set(s)
     assert set(c["steps"][0]) == set(py.steps[0].as_dict()) | {"tracking_error_max"}
     timing = s["timing"]["step"]
@@ -126,11 +131,52 @@ def test_c_rti_loop_applies_pythons_controls(rti_runs: tuple[str, og.MpcResult, 
     assert 0 < timing["qp"]["median"] <= timing["feedback"]["median"]
 
 
+@pytest.fixture(scope="module", params=[("converged", 1), ("rti", 3)])
+def shrinking_runs(request: pytest.FixtureRequest, problem: og.Problem, driver: Path
+                   ) -> tuple[str, int, og.MpcResult, dict]:
+    mode, min_horizon = request.param
+    r = subprocess.run([str(driver), "--horizon", "shrinking", "--min-horizon", str(min_horizon),
+                        "--mismatch", "inertia=1.05", *(["--rti"] if mode == "rti" else [])],
+                       capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    return (mode, min_horizon, og.mpc(problem, N, horizon="shrinking", min_horizon=min_horizon,
+                                      mismatch=MISMATCH, rti=mode == "rti"),
+            json.loads(r.stdout))
+
+
+def test_c_shrinking_loop_applies_pythons_controls(
+        shrinking_runs: tuple[str, int, og.MpcResult, dict]) -> None:
+    """A shrinking horizon (p's T the time left at every sample, the shift's fractional
+    stages those of T - h over T): C's controls and states are Python's to 1e-8 over all N
+    samples, converged and RTI (measured: to the bit converged, 1.6e-10 with RTI's projected
+    Hessian), and so are the statuses — with min_horizon 3 the last two samples hold the last
+    plan in both (status "hold", left out of the timing)."""
+    mode, min_horizon, py, c = shrinking_runs
+    assert_same_path(py, c)
+    statuses = [s["status"] for s in c["steps"]]
+    assert statuses == [s.status for s in py.steps] and len(statuses) == N
+    assert statuses.count("hold") == min_horizon - 1
+    assert (c["settings"]["horizon"], c["settings"]["min_horizon"], c["settings"]["mode"],
+            c["settings"]["steps"]) == ("shrinking", min_horizon, mode, N)
+    assert c["summary"]["failed_steps"] == 0 == py.failed_steps
+    timed = c["summary"]["timing"]["step"]["count"]
+    assert timed == N - min_horizon == py.timing()["step"]["count"]
+    assert set(py.to_dict()) == set(c)
+    for key, value in py.terminal_error.items():
+        assert abs(c["summary"]["terminal_error"][key] - value) <= TOL
+    if mode == "converged":
+        assert [s["iterations"] for s in c["steps"]] == [s.iterations for s in py.steps]
+
+
 def test_c_driver_refuses_bad_input(driver: Path) -> None:
-    """An unknown parameter or a bad factor: exit 2 and a message saying what to write."""
+    """An unknown parameter, a bad factor, horizon or count: exit 2 and a message saying
+    what to write."""
     for args, said in ((["--mismatch", "mass=2"], "no parameter"),
                        (["--mismatch", "inertia=-1"], "> 0"), (["--steps", "0"], ">= 1"),
-                       (["--hessian", "gauss-newton"], "projected or exact")):
+                       (["--hessian", "gauss-newton"], "projected or exact"),
+                       (["--horizon", "sliding"], "receding or shrinking"),
+                       (["--min-horizon", "0"], ">= 1"),
+                       (["--horizon", "shrinking", "--steps", str(N + 1)], f"at most {N}")):
         r = subprocess.run([str(driver), *args], capture_output=True, text=True, timeout=60)
         assert r.returncode == 2 and said in r.stderr, (args, r.stderr)
 

@@ -225,6 +225,7 @@ def model_values(tr: Transcription, default_p: np.ndarray, guess: str,
         f"{int(on)}}}" for b, on in zip(values.blocks, flagged))
     ranges = ",\n".join(_c_range(block_range(b.key, b.kind, on))
                          for b, on in zip(values.blocks, flagged))
+    labels = static_labels(pb)
     return {
         "COMMENT_NAME": plain_name(pb.name), "PROBLEM": _c_string(pb.name), "N": tr.N,
         "ORDER": pb.order, "NX": tr.nx, "NP": tr.np, "NG": tr.ng, "NV": values.size,
@@ -238,7 +239,8 @@ def model_values(tr: Transcription, default_p: np.ndarray, guess: str,
         "RETRACTION": _c_string(tr.scheme.retraction), "RULE": _c_string(tr.disc.rule),
         "GUESS_LABEL": _c_string(guess),
         "MANIFOLDS_JSON": _c_string(json.dumps({f.state: f.manifold for f in G.factors})),
-        "LABELS_JSON": _c_string(json.dumps(static_labels(pb))),
+        "LABELS_JSON": _c_string(json.dumps(labels)),
+        "BOUNDS_JSON": _c_string(json.dumps(labels["bounds"])),  # the C loop's mpc.json
         "N_CHECKS": len(CHECKS), "N_FIGURES": len(FIGURES), "PARAMS_MAX_BYTES": FILE_BYTES,
         "RANGE_SIGNED": SIGNED, "RANGE_POSITIVE": POSITIVE, "RANGE_TIME": TIME,
         "MAX_SECONDS": _c_double(tr.max_seconds),
@@ -365,7 +367,7 @@ def export_c(problem: Problem | CompiledProblem, folder: str | Path, N: int | No
     real_time = closed_loop.rti(tr, prefix) if loop else None
     files: dict[str, str | bytes] = dict(generate(
         tr, solver.ipopt, prefix, _render("prelude.c.in", names),
-        closed_loop.functions(tr, p, prefix, real_time) if loop else ()))
+        closed_loop.functions(tr, prefix, real_time) if loop else ()))
     guess = tr.guess_labels[0]  # what the C solver starts from
     model = {**names, **model_values(tr, p, guess, positive),
              **(closed_loop.values(tr, real_time) if loop else {})}

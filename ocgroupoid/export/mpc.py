@@ -1,11 +1,14 @@
 """The closed loop in exported C: ``{prefix}mpc.c/.h`` and the driver ``DIR/mpc``.
 
-The C loop (``c_templates/mpc.c.in``) is Python's converged loop with a receding horizon
-(:func:`ocgroupoid.mpc.mpc`, ``rti=False``), its sample h = T/N; its arithmetic is the
-Functions of :mod:`ocgroupoid.nlp.loop` the Python loop evaluates, generated here into
-``{prefix}generated_mpc.c``: the plant piece, the shift by one sample (its fractional stages
-those of h = T/N at the exported T: the classic shift by one stage), the measured state into
-p, the initial state of p, distances, terminal errors and the bound violation.
+The C loop (``c_templates/mpc.c.in``) is Python's loop (:func:`ocgroupoid.mpc.mpc`), its
+sample h = T/N, with a receding or a shrinking horizon (``@prefix@mpc_set_horizon``,
+``DIR/mpc --horizon``: the final time fixed, p's T the time left at every sample, the last
+plan held once fewer than ``min_horizon`` samples are left); its arithmetic is the Functions
+of :mod:`ocgroupoid.nlp.loop` the Python loop evaluates, generated here into
+``{prefix}generated_mpc.c``: the plant piece, the shift (the fractional stages sigma an
+input, computed in C per sample as :func:`~ocgroupoid.nlp.loop.stages_after` computes them),
+the measured state into p, the initial state of p, distances, terminal errors and the bound
+violation.
 
 An export writes the loop when the problem has one (:func:`reason`): a fixed final time and
 continuous second-order dynamics, as Python's loop requires.
@@ -26,7 +29,6 @@ from __future__ import annotations
 from typing import Any
 
 import casadi as ca
-import numpy as np
 
 from ..errors import ConfigError
 from ..nlp.assembly import Kind
@@ -38,7 +40,6 @@ from ..nlp.loop import (
     plant_dynamics,
     plant_piece,
     shift_function,
-    stages_after,
     terminal_function,
     terminal_names,
     violation_function,
@@ -83,21 +84,19 @@ def rti(tr: Transcription, prefix: str) -> RtiFunctions | None:
         return None
 
 
-def functions(tr: Transcription, p: np.ndarray, prefix: str,
-              real_time: RtiFunctions | None) -> list[ca.Function]:
+def functions(tr: Transcription, prefix: str, real_time: RtiFunctions | None
+              ) -> list[ca.Function]:
     """The loop's Functions (:mod:`ocgroupoid.nlp.loop`), named ``{prefix}gen_...``, and those
     of ``real_time`` (:func:`rti`)."""
     m = len(tr.problem.controls)
     k = _coefficients(tr) // max(m, 1)
     G = tr.problem.groupoid
-    sf = stage_form(tr.blocks, tr.nx)
-    T = tr.horizon_of(p)
-    sigma = stages_after(sf.K, T / tr.N, T, T)  # the receding horizon's shift by one sample
     n = f"{prefix}gen_"
     return [plant_piece(plant_dynamics(tr), G.state_size + G.algebra_dim, k, m,
                         tr.layout.p_slices["P"].stop - tr.layout.p_slices["P"].start,
                         n + "plant"),
-            shift_function(tr, sf, sigma, n + "shift"), with_state_function(tr, n + "with_state"),
+            shift_function(tr, stage_form(tr.blocks, tr.nx), n + "shift"),
+            with_state_function(tr, n + "with_state"),
             initial_state(tr, n + "initial_state"), distance_function(tr, n + "distance"),
             terminal_function(tr, n + "terminal"),
             violation_function(tr, tr.rows(Kind.INEQUALITY).ravel(), n + "violation")
@@ -135,7 +134,8 @@ def values(tr: Transcription, real_time: RtiFunctions | None) -> dict[str, Any]:
             "MPC_NP_PLANT": P.stop - P.start, "MPC_P_OFFSET": P.start,
             "MPC_N_DISTANCES": len(distances), "MPC_N_TERMINAL": len(terminals),
             "MPC_DISTANCE_NAMES": _names(distances), "MPC_TERMINAL_NAMES": _names(terminals),
-            "MPC_PIECE_COEFFICIENTS": max(_coefficients(tr), 1), **sizes}
+            "MPC_PIECE_COEFFICIENTS": max(_coefficients(tr), 1),
+            "MPC_STAGES": stage_form(tr.blocks, tr.nx).K + 1, **sizes}
 
 
 def make_values(prefix: str, on: bool, real_time: bool) -> dict[str, str]:

@@ -28,9 +28,10 @@ whole rest of the plan), and those steps keep the last plan and count as failed 
 need is an exact (L1) penalty on the terminal rows with slack variables, so that a feasible
 problem keeps its solution. The default :data:`MIN_HORIZON` = 1 re-solves at every sample.
 
-The loop is the one the exported C will run: fixed sizes (one NLP, N intervals, for every
-sample of both horizons), the preparation apart from the feedback, the measurement entering
-only two slices of p.
+The loop is the one the exported C runs (:mod:`ocgroupoid.export.mpc`, both horizons,
+converged and RTI): fixed sizes (one NLP, N intervals, for every sample of both horizons),
+the preparation apart from the feedback, the measurement entering only two slices of p and
+the horizon one entry.
 """
 
 from __future__ import annotations

@@ -16,13 +16,18 @@ coordinates: a warm start need not lie on the group, the reconstruction rows pul
 iterate back onto it. The bound multipliers of a shrinking horizon are interpolated without
 rescaling by the ratio of the steps: a first-order warm start, which IPOPT and the RTI's QP
 correct.
+
+The move is one CasADi Function with sigma an input,
+:func:`~ocgroupoid.nlp.loop.shift_function` (tent weights on sigma, normalised: the linear
+interpolation above), which this loop evaluates and the exported C loop runs generated: both
+horizons do the same arithmetic in Python and in C.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ..nlp.loop import shift, stages_after
+from ..nlp.loop import shift_function, stages_after
 from ..nlp.stageform import stage_form
 from ..nlp.transcription import Transcription
 from .rti import Iterate
@@ -34,6 +39,7 @@ class Shift:
     def __init__(self, tr: Transcription) -> None:
         self.tr = tr
         self.form = stage_form(tr.blocks, tr.nx)
+        self.function = shift_function(tr, self.form)
 
     def sigma(self, h: float, T: float, T_next: float) -> np.ndarray:
         """The fractional stage of the last point where each new stage sits."""
@@ -41,4 +47,5 @@ class Shift:
 
     def __call__(self, it: Iterate, sigma: np.ndarray) -> Iterate:
         """The point ``it`` moved to the stages ``sigma`` (:meth:`sigma`)."""
-        return Iterate(*shift(self.form, it.x, it.lam_g, it.lam_x, sigma))
+        return Iterate(*(np.array(v).ravel()
+                         for v in self.function(it.x, it.lam_g, it.lam_x, sigma)))

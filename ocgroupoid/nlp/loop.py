@@ -2,14 +2,14 @@
 
 The closed loop (:mod:`ocgroupoid.mpc`) and the exported C loop (``{prefix}mpc.c``,
 :mod:`ocgroupoid.export`) run the same computations; each is defined once here, as a
-CasADi Function the Python loop evaluates and the export generates C of (or, for the
-shift, as code that runs on numbers and on CasADi symbols alike, so that both do the same
-operations in the same order):
+CasADi Function the Python loop evaluates and the export generates C of, so that both do the
+same operations in the same order:
 
 * :func:`plant_piece` — the plant over one piece of the applied control polynomial:
   :data:`SUBSTEPS` classical RK4 steps of the continuous dynamics;
-* :func:`move`, :func:`shift`, :func:`shift_function` — the last primal-dual point moved
-  along its own time (:mod:`~ocgroupoid.mpc.shift` says how);
+* :func:`shift_function` — the last primal-dual point moved along its own time to the
+  fractional stages sigma, an input (:func:`stages_after`: a receding or a shrinking
+  horizon; :mod:`~ocgroupoid.mpc.shift` says how);
 * :func:`with_state_function` — a measured state ``z = (s, y)`` into the parameters' initial
   state (each factor's state packed: quaternions normalised), and :func:`initial_state`,
   the state ``z`` p starts from;
@@ -106,54 +106,61 @@ def parts(sf: StageForm) -> tuple[list[Part], list[Part]]:
 
 def stages_after(K: int, h: float, T: float, T_next: float) -> np.ndarray:
     """The fractional stage of the last point where each stage of the next sample's problem
-    sits, ``sigma_k = K h / T + k T' / T`` (:mod:`~ocgroupoid.mpc.shift`)."""
+    sits, ``sigma_k = K h / T + k T' / T`` (:mod:`~ocgroupoid.mpc.shift`; the exported C loop,
+    ``{prefix}mpc.c``, computes it with the same operations in the same order)."""
     return K * h / T + np.arange(K + 1) * T_next / T
 
 
-def move(v: Any, parts: Sequence[Part], sigma: np.ndarray) -> Any:
-    """Every stage's parts of the stage-ordered vector v (numbers, or CasADi symbols: the
-    same operations) taken at the fractional stages sigma, linearly interpolated between the
-    two stages around; a part whose size differs there keeps its own value."""
-    out = v.copy() if isinstance(v, np.ndarray) else type(v)(v)
-    K = sigma.size - 1
-    for part in parts:
-        for k in range(K + 1):
-            n = part.size[k]
-            if n == 0:
-                continue
-            s = min(max(sigma[k], 0.0), float(K))
-            k0 = int(np.floor(s))
-            k1, w = min(k0 + 1, K), s - k0
-            here = slice(part.start[k], part.start[k] + n)
-            sources = [(j, wt) for j, wt in ((k0, 1.0 - w), (k1, w))
-                       if part.size[j] == n and wt > 0.0]
-            total = sum(wt for _, wt in sources)
-            if total > 0.0:
-                out[here] = sum(wt * v[part.start[j]:part.start[j] + n]
-                                for j, wt in sources) / total
-    return out
+def _tent(sigma: ca.MX, J: np.ndarray) -> ca.MX:
+    """The (m x m) tent weights ``w_jk = max(0, 1 - |min(max(sigma_k, 0), K) - j|)`` of the
+    stages J (rows: sources j, columns: targets k)."""
+    K, m = sigma.numel() - 1, J.size
+    s = ca.fmin(ca.fmax(sigma[J.tolist()], 0.0), float(K))
+    j = ca.repmat(ca.MX(ca.DM(J.astype(float))), 1, m)  # m numbers in the C, not m^2
+    return ca.fmax(0.0, 1.0 - ca.fabs(ca.repmat(s.T, m, 1) - j))
 
 
-def shift(sf: StageForm, x: Any, lam_g: Any, lam_x: Any, sigma: np.ndarray
-          ) -> tuple[Any, Any, Any]:
-    """A primal-dual point in the original variables and rows (numbers or symbols) moved to
-    the stages sigma: :func:`move` on its variables and bound multipliers (the parts of z)
-    and on its constraint multipliers (the parts of the rows)."""
-    z_parts, row_parts = parts(sf)
-    z = move(sf.z_of(x), z_parts, sigma)
-    lam_z = move(sf.z_of(lam_x), z_parts, sigma)
-    rows = move(sf.rows_z(lam_g), row_parts, sigma)
-    return sf.x_of(z), sf.rows_x(rows), sf.x_of(lam_z)
+def _moved(v: ca.MX, layout: Sequence[Part], sigma: ca.MX, tents: dict[bytes, ca.MX]
+           ) -> ca.MX:
+    """Every stage's parts of the stage-ordered vector v taken at the fractional stages sigma
+    (:mod:`~ocgroupoid.mpc.shift`): per part and per group of stages J whose part has the
+    same size n, the (n x m) matrix of their blocks times the tent weights of J
+    (:func:`_tent`, kept in ``tents``), each column divided by its total — linear
+    interpolation between the two stages around sigma_k; a column of total 0 (no stage of
+    that size around sigma_k) keeps its own block."""
+    index, blocks = np.arange(v.numel()), list[ca.MX]()
+    for part in layout:
+        for n in sorted(set(part.size.tolist()) - {0}):
+            J = np.flatnonzero(part.size == n)
+            if J.tobytes() not in tents:
+                tents[J.tobytes()] = _tent(sigma, J)
+            W = tents[J.tobytes()]
+            at = (part.start[J][None, :] + np.arange(n)[:, None]).T.ravel()  # block by block
+            V = ca.reshape(v[at.tolist()], n, J.size)
+            total = ca.repmat(ca.sum1(W), n, 1)
+            some = total > 0
+            out = ca.if_else(some, ca.mtimes(V, W) / ca.if_else(some, total, 1.0), V)
+            index[at] = v.numel() + sum(b.numel() for b in blocks) + np.arange(at.size)
+            blocks.append(ca.vec(out))
+    return ca.vertcat(v, *blocks)[index.tolist()]
 
 
-def shift_function(tr: Transcription, sf: StageForm, sigma: np.ndarray,
-                   name: str = "shift") -> ca.Function:
-    """``(x, lam_g, lam_x) -> the same moved to the stages sigma``: :func:`shift` on
-    symbols (MX: the stage form picks entries of a graph), for one fixed sigma (a receding
-    horizon's)."""
+def shift_function(tr: Transcription, sf: StageForm, name: str = "shift") -> ca.Function:
+    """``(x, lam_g, lam_x, sigma) -> the same moved to the fractional stages sigma``
+    (:func:`stages_after`; :mod:`~ocgroupoid.mpc.shift`): the point's variables and bound
+    multipliers move as the parts of z, its constraint multipliers as the parts of the rows
+    (:func:`parts`), in MX with one dense product per part and size, so that the generated C
+    stays small. Python's loop evaluates it and the exported C runs it generated: the same
+    arithmetic for both horizons."""
     x, lam_g, lam_x = ca.MX.sym("x", tr.nx), ca.MX.sym("lam_g", tr.ng), ca.MX.sym("lam_x", tr.nx)
-    return ca.Function(name, [x, lam_g, lam_x], list(shift(sf, x, lam_g, lam_x, sigma)),
-                       ["x", "lam_g", "lam_x"], ["x_next", "lam_g_next", "lam_x_next"])
+    sigma = ca.MX.sym("sigma", sf.K + 1)
+    z_parts, row_parts = parts(sf)
+    tents: dict[bytes, ca.MX] = {}
+    out = [sf.x_of(_moved(sf.z_of(x), z_parts, sigma, tents)),
+           sf.rows_x(_moved(sf.rows_z(lam_g), row_parts, sigma, tents)),
+           sf.x_of(_moved(sf.z_of(lam_x), z_parts, sigma, tents))]
+    return ca.Function(name, [x, lam_g, lam_x, sigma], out, ["x", "lam_g", "lam_x", "sigma"],
+                       ["x_next", "lam_g_next", "lam_x_next"])
 
 
 # ------------------------------------------------------------------ states and parameters
