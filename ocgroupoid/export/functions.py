@@ -121,7 +121,8 @@ def generate(tr: Transcription, ipopt: dict[str, Any] | None, prefix: str,
         with tempfile.TemporaryDirectory(prefix="ocgroupoid-export-") as tmp:
             cg.generate(tmp + "/")
             c, h = (Path(tmp) / f"{name}.{ext}" for ext in ("c", "h"))
-            out[c.name] = prelude + hpipm_defaults(_empty_copies(c.read_text()))
+            out[c.name] = prelude + hpipm_iterations(
+                hpipm_defaults(_empty_copies(c.read_text())), prefix)
             out[h.name] = h.read_text()
     return out
 
@@ -156,3 +157,21 @@ def hpipm_defaults(source: str) -> str:
         return (f"{m.group(1)}d_ocp_qp_ipm_arg_set_default((enum hpipm_mode){mode.group(1)}, "
                 f"&{m.group(2)}.hpipm_options);\n{m.group(0)}")
     return _HPIPM_OPTIONS.sub(first, source)
+
+
+#: CasADi 3.8's generated HPIPM call reads HPIPM's iteration count into its own data, which
+#: it drops on return; Python's conic reports it (``stats()["iter_count"]``)
+_HPIPM_ITER = re.compile(r"^(\s*)d_ocp_qp_ipm_get_iter\(&workspace, &(\w+)->iter_count\);$",
+                         re.M)
+
+
+def hpipm_iterations(source: str, prefix: str) -> str:
+    """Generated C whose HPIPM call hands its iteration count to the hooks
+    (``{prefix}hooks_qp_iterations``: into the running record, as IPOPT's); other code
+    unchanged."""
+    out, n = _HPIPM_ITER.subn(lambda m: f"{m.group(0)}\n{m.group(1)}{prefix}hooks_qp_iterations("
+                              f"{m.group(2)}->iter_count);", source)
+    if n == 0 and "d_ocp_qp_ipm_solve(" in source:
+        raise ExportError("CasADi's generated HPIPM call reads no iteration count: this "
+                          "CasADi's code generation is not the one the export knows (3.8)")
+    return out

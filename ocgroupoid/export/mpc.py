@@ -21,7 +21,10 @@ The stage projection of ``hessian="projected"`` (in Python numpy's eigendecompos
 has no CasADi operation to generate) is the template's C: Jacobi rotations. CasADi 3.8's
 generated HPIPM call leaves five of HPIPM's options unset (among them ``dual_gap_max``, so a
 QP ran to its iteration limit); :func:`~ocgroupoid.export.functions.hpipm_defaults` sets
-HPIPM's defaults of the mode first, as CasADi's own interface does.
+HPIPM's defaults of the mode first, as CasADi's own interface does. The generated call also
+drops HPIPM's iteration count, which Python's RTI reports (the conic's ``iter_count``);
+:func:`~ocgroupoid.export.functions.hpipm_iterations` hands it to the hooks, so that C's
+steps report the same.
 """
 
 from __future__ import annotations
