@@ -42,25 +42,28 @@ def headlines() -> str:
     """Time of RK4 shooting over our fastest method at equal accuracy, per problem file."""
     d = _json("work_precision.json")
     rows = [[f"`{p}`", _ratio(e["schemes"]["cost_error"]), _ratio(e["schemes"]["replay_error"])]
-            for p, e in d.items()]
+            for p, e in d.items() if "schemes" in e]
     return table(["problem", "equal cost accuracy", "equal landing (replay) accuracy"], rows)
 
 
 def best_headlines() -> str:
     """The same for the best configurations (backends, jit), against rk4_quat with and
-    without compiled evaluation."""
+    without compiled evaluation; landing against rk4_quat+jit at 1e-4, 1e-6 and 1e-8."""
     d = _json("work_precision.json")
+    levels = ("1e-04", "1e-06", "1e-08")
     rows = []
     for p, e in d.items():
         best = e.get("best")
         if not best:
             continue
         jit = best.get("vs_jit", {})
+        landing = best.get("landing_vs_jit", {})
         rows.append([f"`{p}`", _ratio(best["cost_error"]),
                      _ratio(jit.get("cost_error"), name=False), _ratio(best["replay_error"]),
-                     _ratio(jit.get("replay_error"), name=False)])
+                     *(_ratio(landing.get(level), name=False) for level in levels)])
     return table(["problem", "cost: vs rk4_quat", "cost: vs rk4_quat+jit",
-                  "landing: vs rk4_quat", "landing: vs rk4_quat+jit"], rows)
+                  "landing: vs rk4_quat", *(f"landing {level.replace('e-0', 'e-')}: vs "
+                                            "rk4_quat+jit" for level in levels)], rows)
 
 
 def work_precision_rows() -> str:
@@ -139,9 +142,32 @@ def sweep() -> str:
         f"\n\nLargest cost difference between the two: {d['max_cost_difference']:g}."
 
 
+def rockit() -> str:
+    """so3: rockit's time over ours at equal landing accuracy, then both lines."""
+    d = _json("rockit.json")
+
+    def ratio(v: float | None) -> str:
+        return "-" if v is None else f"{v:.1f}x"
+
+    head = table(["landing error", "ours", "rockit", "rockit / ours",
+                  "rockit's IPOPT time alone / ours"],
+                 [[f"{r['level']:.0e}", f"{1e3 * r['ours_seconds']:.2f} ms",
+                   f"{1e3 * r['rockit_seconds']:.2f} ms", ratio(r["ratio"]),
+                   ratio(r["ratio_ipopt_only"])] for r in d["equal_landing"]
+                  if r["ours_seconds"] and r["rockit_seconds"]])
+    lines = table(["N", *(f"{name}: {what}" for name in ("ours", "rockit")
+                          for what in ("time", "iterations", "landing error"))],
+                  [[a["N"], f"{1e3 * a['seconds']:.2f} ms", a["iterations"],
+                    f"{a['landing_error']:.1e}", f"{1e3 * b['seconds']:.2f} ms",
+                    b["iterations"], f"{b['landing_error']:.1e}"]
+                   for a, b in zip(d["lines"]["ours"], d["lines"]["rockit"])])
+    return (f"Measured {d['created']} (load average {d['load_average_1min']} on 2 cores), "
+            f"ours `{d['ours_method']}`:\n\n{head}\n\n{lines}")
+
+
 #: the markers a page may hold, ``<!-- generated: NAME -->``, and what fills them
 RENDERERS: dict[str, Callable[[], str]] = {
     "bench-headlines": headlines, "bench-best-headlines": best_headlines,
     "bench-work-precision-rows": work_precision_rows, "bench-stability": stability,
     "bench-so3-build": so3_build, "bench-backends": backends, "bench-codegen": codegen,
-    "bench-drift": drift, "bench-sweep": sweep}
+    "bench-drift": drift, "bench-sweep": sweep, "bench-rockit": rockit}

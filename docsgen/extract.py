@@ -22,6 +22,13 @@ DATA = ROOT / "docs" / "benchmarks" / "data"
 #: the columns kept of a work-precision row
 WP_COLUMNS = ("run", "method", "N", "success", "iterations", "seconds", "cost_error",
               "replay_error")
+#: the landing accuracies at which the best configurations are set against rk4_quat+jit
+LANDING_LEVELS = (1e-4, 1e-6, 1e-8)
+#: each table's input in the results folder: an extract runs when its input is there
+INPUTS = {"work_precision": "work_precision", "stability": "stability/so3.json",
+          "so3_build": "bench_so3.json", "backends": "bench_backends.json",
+          "codegen": "bench_codegen.json", "drift": "energy_drift.json",
+          "sweep": "bench_sweep.json", "rockit": "bench_rockit.json"}
 
 
 def _read(path: Path) -> Any:
@@ -53,19 +60,28 @@ def _at_level(comparisons: list[dict[str, Any]], level: float) -> dict[str, Any]
     return next((c for c in comparisons if c["level"] == level), None)
 
 
+def _rows(path: Path) -> list[dict[str, str]]:
+    if not path.exists():
+        return []
+    with path.open() as f:
+        return list(csv.DictReader(f))
+
+
 def work_precision(results: Path, data: Path) -> dict[str, Any]:
-    """Per problem file: the headline ratios of both runs, and one CSV of their rows."""
-    out: dict[str, Any] = {}
-    for path in sorted((results / "work_precision").glob("*.json")):
-        if path.stem.endswith("_backends"):
-            continue
-        problem = path.stem
-        runs = {"schemes": _read(path)}
-        best = path.with_name(f"{problem}_backends.json")
-        if best.exists():
-            runs["best"] = _read(best)
-        entry: dict[str, Any] = {}
-        rows: list[dict[str, Any]] = []
+    """Per problem file: the headline ratios of both runs, the landing ratios against
+    ``rk4_quat+jit`` at :data:`LANDING_LEVELS`, and one CSV of their rows. A run found in
+    ``results`` replaces that run's entry and rows; the runs it did not repeat are kept."""
+    summary_path = data / "work_precision.json"
+    out: dict[str, Any] = _read(summary_path) if summary_path.exists() else {}
+    found = sorted({p.stem.removesuffix("_backends")
+                    for p in (results / "work_precision").glob("*.json")})
+    for problem in found:
+        runs = {run: _read(path) for run, path in (
+            ("schemes", results / "work_precision" / f"{problem}.json"),
+            ("best", results / "work_precision" / f"{problem}_backends.json")) if path.exists()}
+        entry: dict[str, Any] = out.get(problem, {})
+        csv_path = data / "work_precision" / f"{problem}.csv"
+        rows: list[dict[str, Any]] = [r for r in _rows(csv_path) if r["run"] not in runs]
         for run, summary in runs.items():
             head = summary.get("headline", {})
             entry[run] = {kind: _headline(head.get(kind)) for kind in ("cost_error",
@@ -75,12 +91,15 @@ def work_precision(results: Path, data: Path) -> dict[str, Any]:
                 entry[run]["vs_jit"] = {
                     kind: _headline(_at_level(jit.get(kind, []), head[kind]["level"]))
                     for kind in ("cost_error", "replay_error") if head.get(kind)}
+                entry[run]["landing_vs_jit"] = {
+                    f"{level:.0e}": _headline(_at_level(jit.get("replay_error", []), level))
+                    for level in LANDING_LEVELS}
             entry[run]["created"] = summary.get("created")
             entry[run]["reference"] = summary["reference"]["cost"]
             rows += [{"run": run, **r} for r in summary["rows"] if r.get("kind") == "row"]
-        out[problem] = entry
-        _write_csv(data / "work_precision" / f"{problem}.csv", WP_COLUMNS, rows)
-    (data / "work_precision.json").write_text(json.dumps(out, indent=1) + "\n")
+        out[problem] = dict(sorted(entry.items(), key=lambda kv: kv[0] != "schemes"))
+        _write_csv(csv_path, WP_COLUMNS, rows)
+    summary_path.write_text(json.dumps(dict(sorted(out.items())), indent=1) + "\n")
     return out
 
 
@@ -143,14 +162,33 @@ def sweep(results: Path, data: Path) -> None:
     (data / "sweep.json").write_text(json.dumps(keep, indent=1) + "\n")
 
 
+def rockit(results: Path, data: Path) -> None:
+    """so3 against rockit's RK4 multiple shooting: both lines and the ratios at equal
+    landing accuracy."""
+    d = _read(results / "bench_rockit.json")
+    keep = {"ours_method": d["ours_method"], "created": d.get("created"),
+            "load_average_1min": d.get("machine", {}).get("load_average_1min"),
+            "equal_landing": d["equal_landing"],
+            "lines": {name: [{k: r[k] for k in ("N", "seconds", "iterations",
+                                                "landing_error")} for r in rows]
+                      for name, rows in d["lines"].items()}}
+    (data / "rockit.json").write_text(json.dumps(keep, indent=1) + "\n")
+
+
 def main(argv: list[str]) -> None:
-    """Write every table of ``DATA`` from ``RESULTS`` (defaults: results/, docs/...)."""
+    """Refresh the tables of ``DATA`` whose results are in ``RESULTS`` (defaults: results/,
+    docs/benchmarks/data/); the others are kept as they are."""
     results = Path(argv[0]) if argv else RESULTS
     data = Path(argv[1]) if len(argv) > 1 else DATA
     data.mkdir(parents=True, exist_ok=True)
-    for extract in (work_precision, stability, so3_build, backends, codegen, drift, sweep):
-        extract(results, data)
-    print(f"benchmark tables written to {data}")
+    for extract in (work_precision, stability, so3_build, backends, codegen, drift, sweep,
+                    rockit):
+        source = results / INPUTS[extract.__name__]
+        if source.exists():
+            extract(results, data)
+            print(f"{extract.__name__}: refreshed from {source}")
+        else:
+            print(f"{extract.__name__}: kept ({source} not found)")
 
 
 if __name__ == "__main__":
