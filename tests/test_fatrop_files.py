@@ -2,10 +2,9 @@
 
 Every problem file with its own scheme, from the first geodesic guess, with the file's
 solver options: fatrop converges (``Solve_Succeeded``, no IPOPT run after it) and reaches
-IPOPT's cost from the same start; :data:`KNOWN` are the failures left. The issue's grid,
-N = 16 to 256 and order2 beside each file's scheme, takes minutes: ``scripts/bench_fatrop.py``
-runs it and prints the table; here two N per file, 16 and 64, within the suite's time
-(25 s on two cores).
+IPOPT's cost from the same start. The issue's grid, N = 16 to 256 and order2 beside each
+file's scheme, takes minutes: ``scripts/bench_fatrop.py`` runs it and prints the table; here
+two N per file, 16 and 64, within the suite's time (25 s on two cores).
 """
 
 from __future__ import annotations
@@ -23,14 +22,7 @@ PROBLEMS = sorted((ROOT / "problems").glob("*.yaml"))
 NS = (16, 64)
 TOL = 1e-7  # relative: at the files' tol 1e-10, IPOPT stops 4e-8 above the optimum on
 # reaction_wheels (test_fatrop.py solves both to 1e-12 for its 1e-8)
-#: fatrop's known failures (the issue's): on the cart-pole its watchdog's trial steps fail and
-#: its restoration phase ends locally infeasible (more trial steps, watchdog_trial_iter_max
-#: 10, solve it but loop without end on heavy_top_rotors); strict, to be told when it passes
-KNOWN = {("cart_pole", 64): "fatrop's watchdog and restoration fail on the cart-pole"}
-CASES = [pytest.param(path, N, id=f"{path.stem}-N{N}",
-                      marks=[pytest.mark.xfail(reason=KNOWN[path.stem, N], strict=True)]
-                      if (path.stem, N) in KNOWN else [])
-         for path in PROBLEMS for N in NS]
+CASES = [pytest.param(path, N, id=f"{path.stem}-N{N}") for path in PROBLEMS for N in NS]
 
 
 @pytest.mark.parametrize("path,N", CASES)

@@ -8,10 +8,11 @@ same stage-wise assembly IPOPT gets (:func:`~ocgroupoid.nlp.assembly.assemble`),
 rows permuted into stage order and in the signatures fatrop asks for (the Hessian whole, not
 its upper triangle, with the gradient of the Lagrangian).
 
-fatrop reads the IPOPT options it shares (:data:`SHARED_OPTIONS`, :data:`RENAMED_OPTIONS`); it
-has no dual warm start (a warm start gives it the primal point) and no iteration callback,
-no time limit, and it loops without bound on some singular KKT systems: every solve runs in a
-helper process (:mod:`~ocgroupoid.nlp.isolated`), stopped at its deadline, after repeated
+fatrop reads the IPOPT options it shares (:data:`SHARED_OPTIONS`, :data:`RENAMED_OPTIONS`)
+over its own (:data:`DEFAULT_FATROP`: no watchdog, more second-order corrections); it has no
+dual warm start (a warm start gives it the primal point) and no iteration callback, no time
+limit, and it loops without bound on some singular KKT systems: every solve runs in a helper
+process (:mod:`~ocgroupoid.nlp.isolated`), stopped at its deadline, after repeated
 NaN evaluations, or on Ctrl-C.
 """
 
@@ -35,6 +36,22 @@ from .ipopt import ipopt_options
 #: IPOPT options fatrop also has; the others do not apply to it
 SHARED_OPTIONS = ("tol", "max_iter", "mu_init", "bound_push", "bound_frac", "constr_viol_tol",
                   "acceptable_iter")
+#: fatrop's own options where its defaults fail (measured with ``scripts/bench_fatrop.py``:
+#: every problem file, its scheme and order2, N = 16 to 256). From a start nearly feasible but
+#: far from the optimum (the cart-pole's geodesic guess: infeasibility 8e-3, cost 0.06 against
+#: 49.6) the Newton step is long and the constraints' curvature along it raises the
+#: infeasibility, so that the filter accepts only steps of alpha ~ 5e-3 (IPOPT as well).
+#: fatrop's watchdog, woken after 10 such steps, fails, and so does the restoration phase it
+#: then enters ("locally infeasible": the cart-pole at N >= 32, order2 at N >= 128); given
+#: more trial steps its watchdog runs away instead (heavy_top_rotors order4, N = 32: dual
+#: infeasibility 1e17, then an endless inertia correction). Without the watchdog and with up
+#: to 20 second-order corrections (fatrop's default 4; each must cut the infeasibility by
+#: kappa_soc = 0.99) the full step is corrected back onto the constraints and accepted: the
+#: cart-pole order4 at N = 32, 64, 128, 256 converges in 25, 32, 30, 40 iterations (IPOPT 27,
+#: 56, 67, 59; without the watchdog alone 77, 127, 243, 490). Every other run takes at most
+#: one iteration more than before or fewer (heavy_top_rotors order2 at N = 32 to 256: 21-22,
+#: were 23-28), except heavy_top_rotors order2 at N = 16 (28, was 23; IPOPT 22)
+DEFAULT_FATROP: dict[str, Any] = {"watchdog_shortened_iter_trigger": 0, "max_soc": 20}
 #: IPOPT options fatrop has under another name: constr_mult_init_max 0 (our default: start from
 #: zero multipliers, not least-squares ones) is fatrop's lam_max 0 (measured on so3, N = 256:
 #: 7 -> 4 iterations, as IPOPT's; the other problem files unchanged)
@@ -116,6 +133,13 @@ class FatropBackend(Backend):
         #: the bounds fatrop is given (:func:`tightened`)
         self.bounds = tightened(nlp.bounds_function)
         self.max_iter = int(ipopt.get("max_iter", 3000))
+        # fatrop's stop at an acceptable point (error below tol_acceptable, not tol, for
+        # acceptable_iter = 15 iterations) is not a success, and IPOPT would solve the start
+        # again: it is off (acceptable_iter past max_iter) unless the ipopt options set it.
+        # Near a solution with active bounds fatrop's steps are regularised and converge
+        # linearly: so3_minimum_time order2 N = 64 stopped there after 29 iterations and
+        # converges in 35 (IPOPT 18)
+        own = {"print_level": 0, **DEFAULT_FATROP, "acceptable_iter": self.max_iter + 1}
         self.jit_compiled = False
         if jit:
             functions, self.jit_compiled = compiled(functions)
@@ -123,7 +147,7 @@ class FatropBackend(Backend):
         self.options: dict[str, Any]
         self.options = {"structure_detection": "manual", "N": sf.K, "nx": sf.nx, "nu": sf.nu,
                         "ng": sf.ng, "cache": functions, "print_time": False,
-                        "fatrop": {"print_level": 0,
+                        "fatrop": {**own,
                                    **{k: v for k, v in ipopt.items() if k in SHARED_OPTIONS},
                                    **{RENAMED_OPTIONS[k]: v for k, v in ipopt.items()
                                       if k in RENAMED_OPTIONS}}}
