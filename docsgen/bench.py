@@ -30,12 +30,14 @@ def table(header: list[str], rows: list[list[Any]]) -> str:
     return "\n".join(lines)
 
 
-def _ratio(h: dict[str, Any] | None, name: bool = True) -> str:
-    """``1e-4: 14.0x (order4)``; ``≥`` when ours was more accurate on every grid."""
+def _ratio(h: dict[str, Any] | None, name: bool = True, level: bool = True) -> str:
+    """``1e-4: 14.0x (order4)``; ``≥`` when ours was more accurate on every grid; without
+    the level where the column names it."""
     if not h:
         return "-"
     bound = "≥ " if h["lower_bound"] else ""
-    return f"{h['level']:.0e}: {bound}{h['ratio']:.1f}x" + (f" ({h['ours']})" if name else "")
+    return (f"{h['level']:.0e}: " if level else "") + f"{bound}{h['ratio']:.1f}x" + \
+        (f" ({h['ours']})" if name else "")
 
 
 def headlines() -> str:
@@ -60,7 +62,7 @@ def best_headlines() -> str:
         landing = best.get("landing_vs_jit", {})
         rows.append([f"`{p}`", _ratio(best["cost_error"]),
                      _ratio(jit.get("cost_error"), name=False), _ratio(best["replay_error"]),
-                     *(_ratio(landing.get(level), name=False) for level in levels)])
+                     *(_ratio(landing.get(lv), name=False, level=False) for lv in levels)])
     return table(["problem", "cost: vs rk4_quat", "cost: vs rk4_quat+jit",
                   "landing: vs rk4_quat", *(f"landing {level.replace('e-0', 'e-')}: vs "
                                             "rk4_quat+jit" for level in levels)], rows)
