@@ -34,13 +34,6 @@ DEFAULT_IPOPT: dict[str, Any] = {
     # bounds hold exactly at the solution (IPOPT relaxes them by 1e-8 by default); equality
     # constraints are never relaxed, so problems without bounds are unaffected
     "bound_relax_factor": 0.0,
-    # IPOPT scales a row (and the cost) whose gradient at the start exceeds this by it: at
-    # its default 100 only some of order4's rows (their entries grow as N) were scaled on the
-    # cart-pole, and the line search crawled (56 iterations at N = 64, 59 at N = 256; with 10:
-    # 20 and 23). Measured on every problem file x order2/order4/rk4_quat x N = 16...256:
-    # the cart-pole 2-3x fewer iterations, so3_minimum_time and the quadrotor -4...+2, every
-    # other file unchanged, the same costs (issue 26)
-    "nlp_scaling_max_gradient": 10.0,
     "print_level": 0,
     "sb": "yes",
 }
