@@ -8,18 +8,19 @@ Both solve ``problems/so3_rest_to_rest.yaml`` (the rigid body's rest-to-rest sle
   of one solve (:func:`~ocgroupoid.bench.timing.timed_solve`: the median of repeated solves
   from the same cold start, the build not timed);
 * **rockit**: the same problem written as a rockit user writes it — unit quaternion and body
-  rates as states, ``MultipleShooting(N=N, M=1, intg="rk")`` (one RK4 step per interval,
-  piecewise-constant controls), IPOPT with ``expand`` and the file's ``tol``, the quaternion
-  interpolated as the start; its time is the wall time of ``ocp.solve()`` (median, same
-  repeats), and IPOPT's own ``t_wall_total`` is kept beside it.
+  rates as states (the model of ``bench_mpc.py``), ``MultipleShooting(N=N, M=1,
+  intg="rk")`` (one RK4 step per interval, piecewise-constant controls), IPOPT with
+  ``expand`` and the file's ``tol``, the quaternion interpolated as the start; its time is
+  the wall time of ``ocp.solve()`` (median, same repeats), and IPOPT's own ``t_wall_total``
+  is kept beside it.
 
 Landing accuracy is measured the same way for both, by an integrator that is neither's: each
-plan's controls (our control polynomial; rockit's constants) drive the Euler equations and
-the quaternion kinematics through scipy's DOP853 at rtol 1e-13, and the landing error is the
-larger of the final attitude's angle from the target and the final rate's norm. The time at
-equal landing accuracy at each decade from 1e-5 to 1e-9 is read from both lines as the
-project's work-precision bench reads it (:func:`~ocgroupoid.bench.equal_accuracy.time_at`:
-log-log interpolation between grids); the aim is rockit's time / ours >= 5 at every level.
+plan's controls (our control polynomial; rockit's constants) drive the same model through
+scipy's DOP853 at rtol 1e-13, and the landing error is the larger of the final attitude's
+angle from the target and the final rate's norm. The time at equal landing accuracy at each
+decade from 1e-5 to 1e-9 is read from both lines as the project's work-precision bench reads
+it (:func:`~ocgroupoid.bench.equal_accuracy.time_at`: log-log interpolation between grids);
+the aim is rockit's time / ours >= 5 at every level.
 
 Writes ``bench_rockit.json`` and ``bench_rockit.png`` (time against landing error).
 """
@@ -34,12 +35,12 @@ from typing import Any
 import casadi as ca
 import matplotlib
 import numpy as np
-import yaml
 from scipy.integrate import solve_ivp
 from scipy.interpolate import PPoly
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+from bench_mpc import quat_mul, rigid_body  # noqa: E402  (scripts/: the same quaternion model)
 
 from ocgroupoid import files  # noqa: E402
 from ocgroupoid.bench.equal_accuracy import time_at  # noqa: E402
@@ -47,6 +48,7 @@ from ocgroupoid.bench.methods import parse_methods  # noqa: E402
 from ocgroupoid.bench.record import write_summary  # noqa: E402
 from ocgroupoid.bench.script import arguments, steps  # noqa: E402
 from ocgroupoid.bench.timing import MAX_REPEATS, MIN_SECONDS, Setting, timed_solve  # noqa: E402
+from ocgroupoid.solve import compile_problem  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 FILE = ROOT / "problems" / "so3_rest_to_rest.yaml"
@@ -56,49 +58,29 @@ LEVELS = (1e-5, 1e-6, 1e-7, 1e-8, 1e-9)
 AIM = 5.0
 
 
-def quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Hamilton product of quaternions (w, x, y, z), numbers."""
-    return np.concatenate([[a[0] * b[0] - a[1:] @ b[1:]],
-                           a[0] * b[1:] + b[0] * a[1:] + np.cross(a[1:], b[1:])])
+def landing_error(control: Any, T: float, P: dict[str, Any], q_goal: np.ndarray) -> float:
+    """The plan's controls ``control(t)`` driven through DOP853 from rest at the identity
+    (the dynamics of :func:`bench_mpc.rigid_body`): the larger of the final attitude's angle
+    from ``q_goal`` and the final rate's norm."""
+    z, v = ca.SX.sym("z", 7), ca.SX.sym("u", 3)
+    f = ca.Function("f", [z, v], [ca.vertcat(*rigid_body("so3", z[:4], z[4:], [], v, P))])
 
-
-def sym_quat_mul(a: Any, b: Any) -> Any:
-    """Hamilton product of quaternions (w, x, y, z), CasADi symbols."""
-    return ca.vertcat(a[0] * b[0] - ca.dot(a[1:], b[1:]),
-                      a[0] * b[1:] + b[0] * a[1:] + ca.cross(a[1:], b[1:]))
-
-
-def euler(I: np.ndarray, w: Any, u: Any, cross: Any) -> Any:
-    """``dOmega/dt = (I Omega) x Omega / I + u`` (PROBLEMS.md §1)."""
-    return cross(I * w, w) / I + u
-
-
-def landing_error(control: Any, T: float, I: np.ndarray, q_goal: np.ndarray) -> float:
-    """The plan's controls ``control(t)`` driven through DOP853 from rest at the identity:
-    the larger of the final attitude's angle from ``q_goal`` and the final rate's norm."""
-    def rhs(t: float, z: np.ndarray) -> np.ndarray:
-        q, w = z[:4], z[4:]
-        return np.concatenate([0.5 * quat_mul(q, np.concatenate([[0.0], w])),
-                               euler(I, w, np.asarray(control(t)).ravel(), np.cross)])
+    def rhs(t: float, y: np.ndarray) -> np.ndarray:
+        return np.array(f(y, np.asarray(control(t)).ravel())).ravel()
 
     z0 = np.array([1.0, 0, 0, 0, 0, 0, 0])
     end = solve_ivp(rhs, (0.0, T), z0, method="DOP853", rtol=1e-13, atol=1e-14).y[:, -1]
-    q = end[:4] / np.linalg.norm(end[:4])
-    rel = quat_mul(np.concatenate([[q_goal[0]], -q_goal[1:]]), q)
+    rel = np.array(quat_mul(inverse(q_goal), ca.DM(end[:4] / np.linalg.norm(end[:4])))).ravel()
     angle = 2.0 * np.arctan2(np.linalg.norm(rel[1:]), abs(rel[0]))
     return float(max(angle, np.linalg.norm(end[4:])))
 
 
-def goal(path: Path) -> np.ndarray:
-    """The file's target attitude (``final.R: {axis_angle: ...}``) as a unit quaternion
-    (w, x, y, z)."""
-    aa = yaml.safe_load(path.read_text())["final"]["R"]["axis_angle"]
-    axis = np.asarray(aa["axis"], dtype=float)
-    half = 0.5 * float(aa["angle"])
-    return np.concatenate([[np.cos(half)], np.sin(half) * axis / np.linalg.norm(axis)])
+def inverse(q: np.ndarray) -> ca.DM:
+    """The inverse of a unit quaternion (w, x, y, z)."""
+    return ca.DM(np.concatenate([[q[0]], -q[1:]]))
 
 
-def ours(problem: Any, setting: Setting, N: int, T: float, I: np.ndarray,
+def ours(problem: Any, setting: Setting, N: int, T: float, P: dict[str, Any],
          q_goal: np.ndarray) -> dict[str, Any]:
     """Our fastest configuration on N intervals: median solve time, iterations, landing."""
     timed = timed_solve(problem, parse_methods(OURS, ())[0], N, setting, 3)
@@ -106,10 +88,10 @@ def ours(problem: Any, setting: Setting, N: int, T: float, I: np.ndarray,
     pp = PPoly(np.asarray(sol.control_ppoly["c"]), np.asarray(sol.control_ppoly["x"]))
     return {"N": N, "seconds": timed.median, "iterations": sol.iterations,
             "success": sol.success, "cost": sol.cost,
-            "landing_error": landing_error(pp, T, I, q_goal)}
+            "landing_error": landing_error(pp, T, P, q_goal)}
 
 
-def rockit(N: int, T: float, I: np.ndarray, q_goal: np.ndarray, tol: float
+def rockit(N: int, T: float, P: dict[str, Any], q_goal: np.ndarray, tol: float
            ) -> dict[str, Any]:
     """The rockit transcription on N intervals (module docstring): median wall time of
     ``ocp.solve()``, IPOPT's own time and iterations, landing."""
@@ -118,12 +100,11 @@ def rockit(N: int, T: float, I: np.ndarray, q_goal: np.ndarray, tol: float
     ocp = Ocp(T=T)
     q, w = ocp.state(4), ocp.state(3)
     u = ocp.control(3)
-    ocp.set_der(q, 0.5 * sym_quat_mul(q, ca.vertcat(0, w)))
-    ocp.set_der(w, euler(I, w, u, ca.cross))
+    for part, der in zip((q, w), rigid_body("so3", q, w, [], u, P)):
+        ocp.set_der(part, der)
     ocp.subject_to(ocp.at_t0(q) == ca.DM([1, 0, 0, 0]))
     ocp.subject_to(ocp.at_t0(w) == 0)
-    goal_inv = ca.DM(np.concatenate([[q_goal[0]], -q_goal[1:]]))
-    ocp.subject_to(sym_quat_mul(goal_inv, ocp.at_tf(q))[1:] == 0)
+    ocp.subject_to(quat_mul(inverse(q_goal), ocp.at_tf(q))[1:] == 0)
     ocp.subject_to(ocp.at_tf(w) == 0)
     ocp.add_objective(ocp.integral(ca.sumsqr(u)) / 2)
     ocp.method(MultipleShooting(N=N, M=1, intg="rk"))
@@ -159,7 +140,7 @@ def rockit(N: int, T: float, I: np.ndarray, q_goal: np.ndarray, tol: float
             "ipopt_seconds": statistics.median(ipopt_seconds),
             "iterations": stats["iter_count"], "success": stats["success"],
             "cost": float(sol.value(ocp.objective)),
-            "landing_error": landing_error(control, T, I, q_goal)}
+            "landing_error": landing_error(control, T, P, q_goal)}
 
 
 def ratios(lines: dict[str, list[dict[str, Any]]]) -> list[dict[str, Any]]:
@@ -208,16 +189,18 @@ def main() -> None:
     problem = files.build(cfg)
     f = cfg.file
     setting = Setting(dict(f.solver.ipopt), f.discretization.rule, f.discretization.steps)
-    T = float(f.horizon.T)
-    I = np.asarray(f.parameters["inertia"], dtype=float)
-    q_goal = goal(FILE)
+    tr = compile_problem(problem, 8).transcription  # the instance's numbers, as bench_mpc
+    p = tr.pack()
+    T = tr.horizon_of(p)
+    P = {k: ca.DM(tr.part(p, "P")[sl]) for k, sl in problem.parameter_slices.items()}
+    q_goal = np.asarray(tr.part(p, "end"), dtype=float)[:4]  # SO(3)'s target: a quaternion
     lines: dict[str, list[dict[str, Any]]] = {"ours": [], "rockit": []}
     with steps(2 * len(Ns)) as step:
         for N in Ns:
             step(f"ours N={N}")
-            lines["ours"].append(ours(problem, setting, N, T, I, q_goal))
+            lines["ours"].append(ours(problem, setting, N, T, P, q_goal))
             step(f"rockit N={N}")
-            lines["rockit"].append(rockit(N, T, I, q_goal, float(setting.ipopt.get("tol", 1e-8))))
+            lines["rockit"].append(rockit(N, T, P, q_goal, float(setting.ipopt.get("tol", 1e-8))))
     table = ratios(lines)
     for name, rows in lines.items():
         for r in rows:

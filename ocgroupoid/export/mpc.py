@@ -36,6 +36,7 @@ import casadi as ca
 from ..errors import ConfigError
 from ..nlp.assembly import Kind
 from ..nlp.loop import (
+    MIN_HORIZON,
     check_fixed_horizon,
     distance_function,
     distance_names,
@@ -138,7 +139,8 @@ def values(tr: Transcription, real_time: RtiFunctions | None) -> dict[str, Any]:
             "MPC_N_DISTANCES": len(distances), "MPC_N_TERMINAL": len(terminals),
             "MPC_DISTANCE_NAMES": _names(distances), "MPC_TERMINAL_NAMES": _names(terminals),
             "MPC_PIECE_COEFFICIENTS": max(_coefficients(tr), 1),
-            "MPC_STAGES": stage_form(tr.blocks, tr.nx).K + 1, **sizes}
+            "MPC_STAGES": stage_form(tr.blocks, tr.nx).K + 1, "MPC_MIN_HORIZON": MIN_HORIZON,
+            **sizes}
 
 
 def make_values(prefix: str, on: bool, real_time: bool) -> dict[str, str]:

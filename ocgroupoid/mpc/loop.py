@@ -46,7 +46,7 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from ..errors import ConfigError, SolverError
 from ..model.problem import Problem
 from ..nlp.assembly import Kind
-from ..nlp.loop import check_fixed_horizon
+from ..nlp.loop import MIN_HORIZON, check_fixed_horizon
 from ..nlp.method import DEFAULT_RETRACTION, Method
 from ..nlp.options import DEFAULT_BACKEND, SolverOptions
 from ..nlp.schemes import DEFAULT_RULE, DEFAULT_SCHEME
@@ -62,8 +62,6 @@ from .shift import Shift
 from .state import distance, plan_at, with_state
 
 HORIZONS = ("receding", "shrinking")
-#: the shortest horizon a shrinking loop solves, in samples (module docstring)
-MIN_HORIZON = 1
 #: control samples per sample interval in the recorded trajectory (the figure)
 CONTROL_SAMPLES = 8
 

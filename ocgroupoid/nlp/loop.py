@@ -35,6 +35,9 @@ from .transcription import Transcription
 #: RK4 substeps per control piece: at the samples of the problem files (h ~ 0.1-0.3 s,
 #: rates ~ 1 rad/s) the integration error is ~1e-9, far below any noise or mismatch studied
 SUBSTEPS = 16
+#: the shortest horizon a shrinking loop solves, in samples, by default (Python's loop,
+#: :mod:`ocgroupoid.mpc.loop`, and the exported C's ``MPC_MIN_HORIZON``): re-solve every sample
+MIN_HORIZON = 1
 
 
 def check_fixed_horizon(problem: Problem) -> None:
