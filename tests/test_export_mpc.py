@@ -97,6 +97,7 @@ def test_c_loop_reaches_the_target_like_python(runs: tuple[og.MpcResult, dict]) 
     assert set(py.to_dict()) == set(c)
     assert c["bounds"] == py.bounds and len(c["bounds"]) == 3  # |u_i| <= 0.45
     assert set(c["settings"]) - {"language"} == set(py.settings)
+    assert {k: c["settings"][k] for k in py.settings} == py.settings  # order4 steps with exp
     assert set(py.summary()) == set(s)
     assert set(c["steps"][0]) == set(py.steps[0].as_dict()) | {"tracking_error_max"}
     timing = s["timing"]["step"]

@@ -209,7 +209,7 @@ def mpc(problem: Problem, N: int = 32, steps: int | None = None, *, rti: bool = 
                 "mode": "rti" if rti else "converged", "qp": qp if rti else None,
                 "hessian": hessian if rti else None, "min_horizon": min_horizon,
                 "backend": backend, "noise": noise, "mismatch": mismatch, "seed": seed,
-                "scheme": scheme, "retraction": retraction}
+                "scheme": scheme, "retraction": tr.scheme.retraction}  # the one it steps with
     return MpcResult(problem.name, settings, records, np.array(ts), np.array(Z), sample_t,
                      np.vstack(U), plan, terminal_errors(tr, z[:ns], z[ns:], p),
                      distance(tr, z, end),
