@@ -65,3 +65,25 @@ def test_sums_into_entries_every_stage_touches() -> None:
     assert np.bincount(target).max() > DENSE_ROW  # both paths are taken
     np.testing.assert_allclose(np.array(out(values)).ravel(), expected, rtol=1e-12,
                                atol=1e-12)
+
+
+@pytest.mark.parametrize("factory", [rigid_body, rolling, heavy_top, plate_ball])
+@pytest.mark.parametrize("scheme", og.nlp.SCHEME_NAMES)
+def test_whole_lagrangian_equals_automatic_differentiation(factory, scheme: str) -> None:
+    """fatrop's signature (``whole``): the gradient of the Lagrangian and its whole symmetric
+    Hessian, summed from the stages, equal CasADi's AD of the plain graph."""
+    from ocgroupoid.nlp.assembly import assemble
+    tr = og.compile_problem(factory(), N=5, scheme=scheme).transcription
+    x, p = tr.nlp["x"], tr.nlp["p"]
+    fns = assemble(tr.blocks, ca.MX.sym("x", tr.nx), ca.MX.sym("p", tr.np), whole=True)
+    assert fns["nlp_hess_l"].name_out() == ["grad_gamma_x", "hess_gamma_x_x"]
+    lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", tr.ng)
+    H, grad_l = ca.hessian(lam_f * tr.nlp["f"] + ca.dot(lam_g, tr.nlp["g"]), x)
+    ref = ca.Function("ref", [x, p, lam_f, lam_g], [grad_l, H])
+    rng = np.random.default_rng(5)
+    point = (rng.normal(size=tr.nx) * 0.3, tr.pack(), 0.7, rng.normal(size=tr.ng))
+    got, want = fns["nlp_hess_l"](*point), ref(*point)
+    for name, a, b in zip(("gradient", "Hessian"), got, want):
+        a, b = np.array(ca.DM(a)), np.array(ca.DM(b))
+        assert np.max(np.abs(a - b)) <= 1e-12 * max(1.0, float(np.max(np.abs(b)))), name
+    np.testing.assert_array_equal(np.array(ca.DM(got[1])), np.array(ca.DM(got[1])).T)

@@ -178,12 +178,15 @@ class StageDerivatives:
         f, g = fun(z)
         lam_f, lam = ca.SX.sym("lam_f"), ca.SX.sym("lam", g.numel())
         J = ca.jacobian(g, v)
-        H = ca.hessian(lam_f * f + ca.dot(lam, g), v)[0]
+        H, grad_l = ca.hessian(lam_f * f + ca.dot(lam, g), v)
         self.jac_rows, self.jac_cols = _triplet(J)
         self.hess_rows, self.hess_cols = _triplet(H)
         self.grad = ca.Function(f"{block.name}_grad", [z], [ca.gradient(f, v)])
         self.jac = ca.Function(f"{block.name}_jac", [z], [_nonzeros(J)])
         self.hess = ca.Function(f"{block.name}_hess", [z, lam_f, lam], [_nonzeros(H)])
+        #: the stage Lagrangian's gradient with its Hessian, from one shared graph
+        self.lagrangian = ca.Function(f"{block.name}_lagrangian", [z, lam_f, lam],
+                                      [grad_l, _nonzeros(H)])
 
 
 def _triplet(M: ca.SX) -> tuple[np.ndarray, np.ndarray]:
@@ -218,12 +221,15 @@ def plain_nlp(blocks: list[Block], x: ca.MX, p: ca.MX) -> dict[str, ca.MX]:
     return {"x": x, "p": p, "f": f, "g": g}
 
 
-def assemble(blocks: list[Block], x: ca.MX, p: ca.MX) -> dict[str, Any]:
+def assemble(blocks: list[Block], x: ca.MX, p: ca.MX, whole: bool = False) -> dict[str, Any]:
     """The NLP functions IPOPT needs, from the blocks: f, g and their derivatives.
 
     Returns ``{"f", "g", "nlp_grad_f", "nlp_jac_g", "nlp_hess_l"}``: the expressions f and g
     (``MX``) and three ``Function``s that carry the names and signatures ``casadi.nlpsol``
-    looks up in its function cache.
+    looks up in its function cache. ``nlp_hess_l`` is IPOPT's, the upper triangle of the
+    Hessian of the Lagrangian ``lam_f f + lam_g . g``; with ``whole``, fatrop's: the
+    Lagrangian's gradient and its whole (symmetric) Hessian, both summed from the stages'
+    (one graph per stage, so the gradient costs no Jacobian product).
     """
     nx = x.numel()
     for b in blocks:  # the trailing entries that point into p in every column
@@ -232,7 +238,7 @@ def assemble(blocks: list[Block], x: ca.MX, p: ca.MX) -> dict[str, Any]:
     f, g, inputs = _stage_sums(blocks, ca.vertcat(x, p))
     ng = int(g.numel())
     lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", ng)
-    grad, jac, hess = _Scatter(), _Scatter(), _Scatter()
+    grad, jac, hess, grad_l = _Scatter(), _Scatter(), _Scatter(), _Scatter()
     for b, Z in zip(blocks, inputs):
         d = StageDerivatives(b)
         LAM = ca.reshape(lam_g[b.g_offset:b.g_offset + b.m * b.ncols], b.m, b.ncols)
@@ -242,10 +248,20 @@ def assemble(blocks: list[Block], x: ca.MX, p: ca.MX) -> dict[str, Any]:
         jac.add(d.jac.map(b.ncols)(Z),
                 b.g_offset + np.arange(b.ncols)[None, :] * b.m + d.jac_rows[:, None],
                 var[d.jac_cols, :])
-        hess.add(d.hess.map(b.ncols)(Z, lam_f, LAM), var[d.hess_rows, :], var[d.hess_cols, :])
+        if whole:
+            gl, H = d.lagrangian.map(b.ncols)(Z, lam_f, LAM)
+            grad_l.add(gl, var, np.zeros_like(var))
+        else:
+            H = d.hess.map(b.ncols)(Z, lam_f, LAM)
+        hess.add(H, var[d.hess_rows, :], var[d.hess_cols, :])
     grad_f = grad.dense(nx, lambda r, c: r < nx)
     jac_g = jac.sparse((ng, nx), lambda r, c: c < nx)
-    hess_l = hess.sparse((nx, nx), lambda r, c: (r < nx) & (c < nx) & (r <= c))
+    inside = (lambda r, c: (r < nx) & (c < nx)) if whole else \
+        (lambda r, c: (r < nx) & (c < nx) & (r <= c))
+    hess_l = hess.sparse((nx, nx), inside)
+    lagrangian = ([grad_l.dense(nx, lambda r, c: r < nx), hess_l],
+                  ["grad_gamma_x", "hess_gamma_x_x"]) if whole else \
+        ([hess_l], ["triu_hess_gamma_x_x"])
     return {
         "f": f,
         "g": g,
@@ -253,6 +269,6 @@ def assemble(blocks: list[Block], x: ca.MX, p: ca.MX) -> dict[str, Any]:
                                   ["f", "grad_f_x"]),
         "nlp_jac_g": ca.Function("nlp_jac_g", [x, p], [g, jac_g], ["x", "p"],
                                  ["g", "jac_g_x"]),
-        "nlp_hess_l": ca.Function("nlp_hess_l", [x, p, lam_f, lam_g], [hess_l],
-                                  ["x", "p", "lam_f", "lam_g"], ["triu_hess_gamma_x_x"]),
+        "nlp_hess_l": ca.Function("nlp_hess_l", [x, p, lam_f, lam_g], lagrangian[0],
+                                  ["x", "p", "lam_f", "lam_g"], lagrangian[1]),
     }

@@ -6,7 +6,7 @@ time linear in N with small dense blocks. It needs the NLP in stage form
 (:mod:`~ocgroupoid.nlp.stageform`), which every scheme's blocks give. The derivatives are the
 same stage-wise assembly IPOPT gets (:func:`~ocgroupoid.nlp.assembly.assemble`), with the
 rows permuted into stage order and in the signatures fatrop asks for (the Hessian whole, not
-its upper triangle, with the gradient of the Lagrangian).
+its upper triangle, with the gradient of the Lagrangian, both summed from the stages).
 
 fatrop reads the IPOPT options it shares (:data:`SHARED_OPTIONS`, :data:`RENAMED_OPTIONS`)
 over its own (:data:`DEFAULT_FATROP`: no watchdog, more second-order corrections); it has no
@@ -93,15 +93,14 @@ def tightened(bounds: ca.Function) -> ca.Function:
 def _functions(sf: StageForm, np_: int) -> tuple[dict[str, Any], dict[str, ca.Function]]:
     """The NLP dict and the five Functions fatrop evaluates, in stage-form order."""
     z, p = ca.MX.sym("z", sf.nz), ca.MX.sym("p", np_)
-    fns = assemble(sf.blocks, z, p)
+    fns = assemble(sf.blocks, z, p, whole=True)
     order = sf.order.tolist()
     g = fns["g"][order]
     _, jac = fns["nlp_jac_g"](z, p)
     jac = jac[order, :]
     f, grad_f = fns["nlp_grad_f"](z, p)
     lam_f, lam = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", sf.order.size)
-    hess = ca.triu2symm(fns["nlp_hess_l"](z, p, lam_f, lam[sf.rank.tolist()]))
-    grad_l = lam_f * grad_f + ca.mtimes(jac.T, lam)
+    grad_l, hess = fns["nlp_hess_l"](z, p, lam_f, lam[sf.rank.tolist()])
     functions = {
         "nlp_f": ca.Function("nlp_f", [z, p], [fns["f"]], ["x", "p"], ["f"]),
         "nlp_g": ca.Function("nlp_g", [z, p], [g], ["x", "p"], ["g"]),
