@@ -26,6 +26,7 @@ import numpy as np
 
 from ...errors import ConfigError
 from ..assembly import assemble
+from ..buffered import Buffered
 from ..isolated import NAN_LIMIT, Isolated, Stopped
 from ..jit import compiled
 from ..options import SolverOptions
@@ -156,6 +157,7 @@ class FatropBackend(Backend):
             raise ConfigError(f"fatrop rejected the NLP or its options: {err}; use "
                               "solver.backend: ipopt") from None
         self._isolated = Isolated(self._solve_here)
+        self._call, self._bounds = Buffered(self.solver), Buffered(self.bounds)
         #: the time the build took (stage form, Functions, jit, nlpsol)
         self.build_seconds = time.perf_counter() - t0
 
@@ -163,7 +165,8 @@ class FatropBackend(Backend):
         """The solver's inputs in stage form, for an original point x0 and parameters p (numbers,
         or graphs for the exported solver; every copy starts at its variable)."""
         sf = self.form
-        lbg, ubg, lbx, ubx = self.bounds(p)
+        bounds: Any = self.bounds(p) if isinstance(p, ca.MX) else self._bounds(p=p).values()
+        lbg, ubg, lbx, ubx = bounds
         lbz, ubz = sf.bounds_z(lbx, ubx)
         return {"x0": sf.z_of(x0), "p": p, "lbg": sf.rows_z(lbg), "ubg": sf.rows_z(ubg),
                 "lbx": lbz, "ubx": ubz}
@@ -195,14 +198,13 @@ class FatropBackend(Backend):
         sf = self.form
         arguments = self.arguments(x0, p)
         t0 = time.perf_counter()
-        r = self.solver(**arguments)
+        r = self._call(**arguments)
         seconds = time.perf_counter() - t0
-        stats = self.solver.stats()
+        stats = self._call.stats()
         success, iterations = bool(stats["success"]), int(stats["iter_count"])
         status = STATUS.get(int(stats["fatrop"]["return_flag"]), FAILED)
-        return Run(sf.x_of(np.array(r["x"])), float(r["f"]),
-                            sf.rows_x(np.array(r["lam_g"])), sf.x_of(np.array(r["lam_x"])),
-                            status, success, iterations, seconds)
+        return Run(sf.x_of(r["x"]), float(r["f"][0]), sf.rows_x(r["lam_g"]), sf.x_of(r["lam_x"]),
+                   status, success, iterations, seconds)
 
     def graph(self, x0: ca.MX, p: ca.MX, lam_g0: ca.MX | None = None,
               lam_x0: ca.MX | None = None) -> dict[str, Any]:

@@ -17,6 +17,7 @@ import casadi as ca
 import numpy as np
 
 from ...errors import ConfigError
+from ..buffered import Buffered
 from ..jit import compiled
 from ..options import MAX_SECONDS, SolverOptions
 from ..watch import Watch
@@ -81,6 +82,7 @@ class IpoptBackend(Backend):
         self.jit_seconds = time.perf_counter() - t0
         t0 = time.perf_counter()
         self._watch: Watch | None = None
+        self._calls: dict[int, Buffered] = {}
         try:
             #: the plain IPOPT instance (no Python inside: the exported C solver's)
             self.solver = ca.nlpsol(self.function_name, "ipopt", self.nlp, self.options)
@@ -109,7 +111,7 @@ class IpoptBackend(Backend):
         """IPOPT from ``start``: the warm solver when it carries multipliers, else the
         watched one when someone listens, else the plain one. Its deadline is IPOPT's own
         ``max_wall_time`` and the listener's (which stops IPOPT by returning True)."""
-        lbg, ubg, lbx, ubx = self.bounds(start.p)
+        bounds = self._call(self.bounds)(p=start.p)
         solver = self.solver
         duals: dict[str, np.ndarray] = {}
         if start.lam_g0 is not None and start.lam_x0 is not None:
@@ -117,16 +119,22 @@ class IpoptBackend(Backend):
         elif start.listener is not None:
             solver = self.watched_solver
             assert self._watch is not None
-            self._watch.start(start.listener, np.array(lbg).ravel(), np.array(ubg).ravel())
+            self._watch.start(start.listener, bounds["lbg"], bounds["ubg"])
+        call = self._call(solver)
         t0 = time.perf_counter()
-        r = solver(x0=start.x0, p=start.p, lbg=lbg, ubg=ubg, lbx=lbx, ubx=ubx, **duals)
+        r = call(x0=start.x0, p=start.p, **bounds, **duals)
         seconds = time.perf_counter() - t0
-        stats = solver.stats()
+        stats = call.stats()
         status = str(stats["return_status"])
         iterations = 0 if status == "Not_Enough_Degrees_Of_Freedom" else int(stats["iter_count"])
-        return Run(np.array(r["x"]).ravel(), float(r["f"]), np.array(r["lam_g"]).ravel(),
-                   np.array(r["lam_x"]).ravel(), status, bool(stats["success"]), iterations,
-                   seconds)
+        return Run(r["x"], float(r["f"][0]), r["lam_g"], r["lam_x"], status,
+                   bool(stats["success"]), iterations, seconds)
+
+    def _call(self, fn: ca.Function) -> Buffered:
+        """The buffered calls of ``fn`` (:mod:`~ocgroupoid.nlp.buffered`), made once."""
+        if id(fn) not in self._calls:  # each holds its Function: the ids stay distinct
+            self._calls[id(fn)] = Buffered(fn)
+        return self._calls[id(fn)]
 
     def graph(self, x0: ca.MX, p: ca.MX, lam_g0: ca.MX | None = None,
               lam_x0: ca.MX | None = None) -> dict[str, Any]:
