@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..nlp.buffered import Buffered
 from ..nlp.loop import shift_function, stages_after
 from ..nlp.stageform import stage_form
 from ..nlp.transcription import Transcription
@@ -40,6 +41,7 @@ class Shift:
         self.tr = tr
         self.form = stage_form(tr.blocks, tr.nx)
         self.function = shift_function(tr, self.form)
+        self._call = Buffered(self.function)
 
     def sigma(self, h: float, T: float, T_next: float) -> np.ndarray:
         """The fractional stage of the last point where each new stage sits."""
@@ -47,5 +49,5 @@ class Shift:
 
     def __call__(self, it: Iterate, sigma: np.ndarray) -> Iterate:
         """The point ``it`` moved to the stages ``sigma`` (:meth:`sigma`)."""
-        return Iterate(*(np.array(v).ravel()
-                         for v in self.function(it.x, it.lam_g, it.lam_x, sigma)))
+        return Iterate(*self._call(x=it.x, lam_g=it.lam_g, lam_x=it.lam_x,
+                                   sigma=sigma).values())
