@@ -26,3 +26,25 @@ def client() -> Iterator[Any]:
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                       dashboard_address=None) as cluster, Client(cluster) as c:
         yield c
+
+
+def pytest_itemcollected(item: pytest.Item) -> None:
+    """Under ``--dist loadgroup`` (pyproject's addopts): the tests that share a module- or
+    class-scoped fixture (one of its parameters) form one group and run on one worker, so
+    its set-up (a C build, a reference solve) is paid once rather than once per worker.
+    (Marked as each item is collected: xdist reads the marks in its own
+    ``pytest_collection_modifyitems``.)"""
+    info = getattr(item, "_fixtureinfo", None)
+    if info is None:
+        return
+    callspec = getattr(item, "callspec", None)
+    keys = []
+    for name in info.names_closure:
+        defs = info.name2fixturedefs.get(name)
+        if not defs or defs[-1].scope not in ("module", "class"):
+            continue
+        index = callspec.indices.get(name) if callspec is not None else None
+        keys.append(name if index is None else f"{name}={index}")  # no "]": xdist
+    if keys:
+        module = item.nodeid.split("::")[0]
+        item.add_marker(pytest.mark.xdist_group(f"{module}:{','.join(sorted(keys))}"))
