@@ -44,6 +44,9 @@ def pytest_itemcollected(item: pytest.Item) -> None:
         if not defs or defs[-1].scope not in ("module", "class"):
             continue
         index = callspec.indices.get(name) if callspec is not None else None
+        if index is not None and any(name in str(m.args[0]).replace(" ", "").split(",")
+                                     for m in item.iter_markers("parametrize")):
+            index = f"{item.originalname}:{index}"  # the test's own list (indirect=True)
         keys.append(name if index is None else f"{name}={index}")  # no "]": xdist
     if keys:
         module = item.nodeid.split("::")[0]
