@@ -68,11 +68,11 @@ class RtiFunctions:
         x, lam_g, p = (ca.MX.sym(n, k) for n, k in (("x", tr.nx), ("lam_g", tr.ng), ("p", tr.np)))
         e = p[emb.p_index.tolist()]
         zs, lam = ca.MX.sym("z", sf.nz), ca.MX.sym("lam_g", sf.order.size)
-        fns = assemble(sf.blocks, zs, p)
+        fns = assemble(sf.blocks, zs, p, whole=True)  # the whole Hessian, from the stages
         order = sf.order.tolist()
         g, jac = fns["nlp_jac_g"](zs, p)
         _, grad = fns["nlp_grad_f"](zs, p)
-        hess = ca.triu2symm(fns["nlp_hess_l"](zs, p, 1.0, lam[sf.rank.tolist()]))
+        _, hess = fns["nlp_hess_l"](zs, p, 1.0, lam[sf.rank.tolist()])
         #: the stage sizes ``nx + nu``, and the Hessian's pattern: their dense diagonal blocks
         self.stage_sizes = [a + b for a, b in zip(sf.nx, sf.nu)]
         self.hessian_sparsity = ca.diagcat(*[ca.Sparsity.dense(s, s) for s in self.stage_sizes])
