@@ -44,10 +44,16 @@ def pytest_itemcollected(item: pytest.Item) -> None:
         if not defs or defs[-1].scope not in ("module", "class"):
             continue
         index = callspec.indices.get(name) if callspec is not None else None
-        if index is not None and any(name in str(m.args[0]).replace(" ", "").split(",")
-                                     for m in item.iter_markers("parametrize")):
+        if index is not None and any(name in _argnames(m) for m in
+                                     item.iter_markers("parametrize")):
             index = f"{item.originalname}:{index}"  # the test's own list (indirect=True)
         keys.append(name if index is None else f"{name}={index}")  # no "]": xdist
     if keys:
         module = item.nodeid.split("::")[0]
         item.add_marker(pytest.mark.xdist_group(f"{module}:{','.join(sorted(keys))}"))
+
+
+def _argnames(mark: pytest.Mark) -> list[str]:
+    """The names a ``parametrize`` mark sets: "a, b" or ("a", "b")."""
+    names = mark.args[0] if mark.args else mark.kwargs.get("argnames", ())
+    return [n.strip() for n in names.split(",")] if isinstance(names, str) else list(names)
