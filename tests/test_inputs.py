@@ -219,7 +219,8 @@ def test_multistart_is_a_strict_bool_or_count(tmp_path, value: str) -> None:
 
 @pytest.mark.parametrize("levels, expected", [
     ("[2, 3, 4, 5, 6, 7, 8, 9, 10]", "at most 8 are allowed"),
-    ("[4, 1000000000]", "must be coarser than horizon.N = 16")])
+    ("[4, 1000000000]", "must be coarser than horizon.N = 16"),
+    ("[order3]", "order2")])
 def test_continuation_levels_are_bounded(tmp_path, levels: str, expected: str) -> None:
     text = SO3 + f"  continuation: {levels}\n"
     refused(tmp_path, text, f"p.yaml:{line_of(text, 'continuation')}", "solver.continuation",

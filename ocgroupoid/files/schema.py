@@ -197,9 +197,11 @@ class SolverSection(Strict):
     workers: Annotated[int, Field(strict=True, ge=1)] | None = Field(
         None, description="processes the starts of a multi-start are solved on at once: "
         "one per core when unset, 1 for one start after the other")
-    continuation: list[Annotated[int, Field(strict=True, ge=2)]] = Field(
+    continuation: list[Annotated[int, Field(strict=True, ge=2)]
+                       | Literal[SCHEME_NAMES]] = Field(  # type: ignore[valid-type]
         default_factory=list, max_length=CONTINUATION_MAX,
-        description=f"coarser N solved first, e.g. [16, 32] (at most {CONTINUATION_MAX})")
+        description=f"coarser N solved first, e.g. [16, 32], then schemes solved first on "
+        f"the final grid, e.g. [order2] before order4 (at most {CONTINUATION_MAX})")
     accuracy: Annotated[float, BeforeValidator(_accuracy)] | None = Field(
         None, description=f"with horizon.N: auto: the relative error of the cost to reach, "
         f"in (0, {ACCURACY_MAX:g}] (e.g. 1.0e-6), estimated by Richardson from two grids")

@@ -16,6 +16,7 @@ from numbers import Integral
 from typing import Any
 
 from ..errors import ConfigError
+from .schemes import SCHEME_NAMES
 
 #: the wall time one solve may take (seconds, ``solver.max_seconds``): IPOPT's
 #: ``max_wall_time`` for each of its runs, and the deadline of a fatrop run
@@ -59,8 +60,10 @@ class SolverOptions:
     #: True (every geodesic guess, the model's and 3 perturbed starts), False (the first
     #: geodesic guess) or a number of perturbed starts
     multistart: bool | int = DEFAULT_MULTISTART
-    #: coarser N solved first, each interpolated onto the next grid
-    continuation: tuple[int, ...] = ()
+    #: what is solved first, each solution interpolated onto the next: coarser N (integers,
+    #: in increasing order), then other schemes on the final grid (names, in the order
+    #: given; e.g. ``("order2",)`` before an ``order4`` solve)
+    continuation: tuple[int | str, ...] = ()
     #: the processes a multi-start solves its starts on (:mod:`~ocgroupoid.solve.parallel`):
     #: None, one per core; 1, one start after the other in this process
     workers: int | None = None
@@ -79,10 +82,12 @@ class SolverOptions:
             raise ConfigError(f"multistart is True, False or a number of perturbed starts "
                               f"(>= 0), got {multistart!r}")
         grids = tuple(self.continuation)
-        if not all(isinstance(n, Integral) and not isinstance(n, bool) and n >= 2
+        if not all(n in SCHEME_NAMES if isinstance(n, str) else
+                   isinstance(n, Integral) and not isinstance(n, bool) and n >= 2
                    for n in grids):
-            raise ConfigError(f"continuation lists coarser grids, integers >= 2, e.g. "
-                              f"(16, 32), got {self.continuation!r}")
+            raise ConfigError(f"continuation lists coarser grids, integers >= 2, and schemes "
+                              f"to solve first on the final grid ({', '.join(SCHEME_NAMES)}), "
+                              f"e.g. (16, 32) or ('order2',), got {self.continuation!r}")
         workers = self.workers
         if workers is not None and (isinstance(workers, bool) or not isinstance(
                 workers, Integral) or workers < 1):
@@ -92,7 +97,8 @@ class SolverOptions:
         object.__setattr__(self, "ipopt", dict(self.ipopt))
         object.__setattr__(self, "workers", None if workers is None else int(workers))
         object.__setattr__(self, "max_seconds", check_seconds(self.max_seconds))
-        object.__setattr__(self, "continuation", tuple(int(n) for n in grids))
+        object.__setattr__(self, "continuation",
+                           tuple(n if isinstance(n, str) else int(n) for n in grids))
 
     @property
     def run_ipopt(self) -> dict[str, Any]:

@@ -4,7 +4,9 @@ Optimal-control problems on SO(3) have several local minima (a slew may turn the
 the long way round). ``multistart`` solves from every geodesic guess (each group factor both
 ways round), the model's own guesses and a few deterministic perturbations, keeps the best
 feasible result and lists the distinct minima met. ``continuation`` solves on coarse grids
-first and interpolates each solution onto the next grid as its initial guess.
+first and interpolates each solution onto the next grid as its initial guess; it may also
+name cheaper schemes solved first on the final grid (``order2`` before ``order4``: a start
+far from the optimum converges in the cheap scheme, the costly one then takes a few steps).
 """
 
 from __future__ import annotations
@@ -115,15 +117,17 @@ class CompiledProblem:
         self.max_seconds = options.max_seconds
         self.disc = Discretization.of(method)
         self.transcription = Transcription(problem, self.disc, options)
-        self._coarse: dict[int, Transcription] = {}
+        self._coarse: dict[tuple[int, str | None], Transcription] = {}
         self._phased: dict[tuple[Any, ...], Transcription] = {}
 
-    def _at(self, N: int) -> Transcription:
-        if N == self.disc.N:
+    def _at(self, N: int, scheme: str | None = None) -> Transcription:
+        """The transcription on N intervals, with another scheme (continuation) if given."""
+        if N == self.disc.N and scheme is None:
             return self.transcription
-        if N not in self._coarse:
-            self._coarse[N] = Transcription(self.problem, replace(self.disc, N=N), self.options)
-        return self._coarse[N]
+        if (N, scheme) not in self._coarse:
+            disc = replace(self.disc, N=N, scheme=scheme or self.disc.scheme)
+            self._coarse[N, scheme] = Transcription(self.problem, disc, self.options)
+        return self._coarse[N, scheme]
 
     def guesses(self, tr: Transcription, p: np.ndarray, multistart: bool | int) -> list[Guess]:
         """The first geodesic guess; with ``multistart`` every geodesic guess, the model's own
@@ -137,7 +141,8 @@ class CompiledProblem:
 
     def solve(self, params: dict[str, Any] | None = None, initial: dict[str, Any] | None = None,
               final: dict[str, Any] | None = None, T: float | None = None,
-              multistart: bool | int | None = None, continuation: Sequence[int] | None = None,
+              multistart: bool | int | None = None,
+              continuation: Sequence[int | str] | None = None,
               guess: Guess | Solution | np.ndarray | None = None, replay: bool = True,
               progress: Progress = _noop,
               replay_tolerance: float = REPLAY_TOLERANCE, warm: Solution | None = None
@@ -150,7 +155,8 @@ class CompiledProblem:
         and the CLI), False (the first geodesic only; the default of the options, which the
         exported C solver shares) or the number of perturbed starts; the starts run on
         ``options.workers`` processes (:mod:`~ocgroupoid.solve.parallel`). ``continuation``:
-        coarser N solved first, in order; the last of them gives the Solution a Richardson
+        coarser N solved first, in order, then the schemes it names on this N (e.g.
+        ``[16, "order2"]``); the last of them gives the Solution a Richardson
         estimate of its cost error (:attr:`Solution.error_estimate`); both default to the
         solver options'. ``replay``: drive the controls
         through the continuous dynamics (a few ms; it decides whether the plan lands,
@@ -176,21 +182,31 @@ class CompiledProblem:
                     "problem (same N and structure), or pass guess= instead")
             guess = Guess("warm start", np.zeros((0, 0)), warm.x, warm.lam_g, warm.lam_x)
             multistart, continuation = False, None
-        levels = sorted(set(int(n) for n in (continuation or [])))
+        levels = sorted(set(int(n) for n in (continuation or []) if not isinstance(n, str)))
         if any(n >= self.disc.N for n in levels):
             raise ConfigError(f"continuation grids must be coarser than N={self.disc.N}: {levels}")
+        schemes = [n for n in (continuation or []) if isinstance(n, str)]
+        if self.disc.scheme in schemes or len(set(schemes)) < len(schemes) or \
+                any(not isinstance(n, (str, int)) for n in (continuation or [])):
+            raise ConfigError(f"continuation: the schemes solved first on the final grid must "
+                              f"differ from each other and from the solve's own "
+                              f"({self.disc.scheme}), got {list(continuation or [])}")
         results: list[RawResult] = []
         multi: dict[str, Any] = {}  # diagnostics["multistart"]
         given = guess
         prev: tuple[Transcription, RawResult] | None = None
-        coarse = prev  # the grid solved before the last one (continuation)
+        coarse = prev  # the grid of this scheme solved before the last one (continuation)
+        same = prev  # the last grid solved with this scheme
         notes: list[str] = []  # continuation grids that landed above a coarser minimum
         self._spent = 0.0  # solver seconds of every run of this solve: starts, grids, phases
         adaptive: dict[str, Any] = {}
         deadline = time.monotonic() + self.max_seconds
         with interruptible() as interrupt:
-            for n in [*levels, self.disc.N]:
-                tr = self._at(n)
+            plan: list[tuple[int, str | None]] = [*((n, None) for n in levels),
+                                                  *((self.disc.N, s) for s in schemes),
+                                                  (self.disc.N, None)]
+            for n, scheme in plan:
+                tr = self._at(n, scheme)
                 p = tr.pack(params, initial, final, T)
                 if prev is not None:
                     starts = [interpolate(prev[0], prev[1].x, prev[1].p, n)]
@@ -202,11 +218,13 @@ class CompiledProblem:
                 if prev is None:
                     results, multi = level, report
                 best = min(level, key=lambda r: (not r.success, r.cost))
-                if prev is not None and not interrupt.requested and \
-                        _higher(best, prev[1], CONTINUATION_GAP):
-                    best, note = self._bridge(prev, n, best, params, initial, final, T, progress)
+                if scheme is None and same is not None and not interrupt.requested and \
+                        _higher(best, same[1], CONTINUATION_GAP):  # against this scheme's
+                    best, note = self._bridge(same, n, best, params, initial, final, T, progress)
                     notes.append(note)
-                coarse, prev = prev, (tr, best)
+                prev = (tr, best)
+                if scheme is None:
+                    coarse, same = same, prev
                 if interrupt.requested or time.monotonic() > deadline:
                     break
             assert prev is not None
