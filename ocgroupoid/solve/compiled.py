@@ -186,8 +186,7 @@ class CompiledProblem:
         if any(n >= self.disc.N for n in levels):
             raise ConfigError(f"continuation grids must be coarser than N={self.disc.N}: {levels}")
         schemes = [n for n in (continuation or []) if isinstance(n, str)]
-        if self.disc.scheme in schemes or len(set(schemes)) < len(schemes) or \
-                any(not isinstance(n, (str, int)) for n in (continuation or [])):
+        if self.disc.scheme in schemes or len(set(schemes)) < len(schemes):
             raise ConfigError(f"continuation: the schemes solved first on the final grid must "
                               f"differ from each other and from the solve's own "
                               f"({self.disc.scheme}), got {list(continuation or [])}")
