@@ -82,7 +82,7 @@ def load(path: str | Path | None = None, overrides: list[str] | None = None,
     top = validate(ProblemFile, data, (), locate)
     check_auto(top, locate)
     finer = [n for n in top.solver.continuation  # none with N: auto
-             if not isinstance(n, str) and n >= top.horizon.N]  # none with N: auto
+             if not isinstance(n, str) and n >= top.horizon.N]
     if finer:
         raise ConfigError(f"{locate('solver', 'continuation')}: solver.continuation {finer} "
                           f"must be coarser than horizon.N = {top.horizon.N}; lower or drop "

@@ -63,6 +63,16 @@ def _multistart(v: Any) -> bool | int:
     return v
 
 
+def _level(v: Any) -> int | str:
+    """A continuation level: a coarser N (an integer >= 2) or a scheme's name."""
+    if isinstance(v, str) and v in SCHEME_NAMES:
+        return v
+    if isinstance(v, bool) or not isinstance(v, int) or v < 2:
+        raise ValueError(f"continuation lists coarser N (integers >= 2) and schemes to solve "
+                         f"first ({', '.join(SCHEME_NAMES)}), got {v!r}")
+    return v
+
+
 def _intervals(v: Any) -> Any:
     """A number of intervals >= 2 (no float, no boolean), or ``auto``."""
     if v == "auto":
@@ -197,8 +207,7 @@ class SolverSection(Strict):
     workers: Annotated[int, Field(strict=True, ge=1)] | None = Field(
         None, description="processes the starts of a multi-start are solved on at once: "
         "one per core when unset, 1 for one start after the other")
-    continuation: list[Annotated[int, Field(strict=True, ge=2)]
-                       | Literal[SCHEME_NAMES]] = Field(  # type: ignore[valid-type]
+    continuation: list[Annotated[int | str, BeforeValidator(_level)]] = Field(
         default_factory=list, max_length=CONTINUATION_MAX,
         description=f"coarser N solved first, e.g. [16, 32], then schemes solved first on "
         f"the final grid, e.g. [order2] before order4 (at most {CONTINUATION_MAX})")
