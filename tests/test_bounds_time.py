@@ -94,6 +94,17 @@ def test_adaptive_steps_put_a_node_on_the_switch(N: int) -> None:
     assert sol.diagnostics["replay"]["max_terminal_error"] <= 1e-8
 
 
+def test_adaptive_steps_continue_through_order2() -> None:
+    """order2 cannot place adaptive steps; as a start on the way (``continuation:
+    [order2]``, and the rescue of a failed order4) it is solved on uniform steps, and order4
+    then places the steps: T exact, as without it."""
+    sol = og.solve(minimum_time(), N=17, scheme="order4", steps="adaptive",
+                   continuation=["order2"])
+    assert solved_but_degenerate(sol), (sol.status, sol.hint)
+    assert sol.diagnostics["adaptive"]["used"]
+    assert abs(sol.T - T_STAR) <= 1e-6, sol.T
+
+
 def test_adaptive_steps_need_interval_stages() -> None:
     with pytest.raises(ConfigError, match="adaptive steps.*order4"):
         og.compile_problem(minimum_time(), N=8, scheme="order2", steps="adaptive")

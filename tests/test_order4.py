@@ -187,6 +187,33 @@ def test_order4_from_the_long_way_round_continues_through_order2() -> None:
     assert coarse_too.diagnostics["error_estimate"]["N"] == [32, 64]  # order4's grids
 
 
+def test_a_failed_order4_solve_is_rescued_through_order2() -> None:
+    """From the great circle the long way round order4 on N=64 fails (here at an iteration
+    limit of 60, about 1 s; without one IPOPT fails after 39 s). The solve then solves order2
+    on the same grid from the same start, and order4 from its solution: verified in the
+    natural minimum, the rescue told in the diagnostics and its time counted. A rescue that
+    fails too says so in the hint; asking for order2 first leaves nothing to rescue."""
+    solver = og.compile_problem(heavy_top(), N=64, scheme="order4", ipopt={"max_iter": 60})
+    tr = solver.transcription
+    p = tr.pack()
+    natural = solver.solve(multistart=False)
+    assert natural.success and "rescue" not in natural.diagnostics
+    far = next(g for g in solver.guesses(tr, p, True) if g.label == "great circle, long way")
+    sol = solver.solve(guess=far)
+    assert sol.success and sol.cost == pytest.approx(natural.cost, rel=1e-9)
+    rescue = sol.diagnostics["rescue"]
+    assert rescue["rescued"] and rescue["scheme"] == "order2"
+    assert rescue["failed"] == "Maximum_Iterations_Exceeded"
+    assert len(rescue["iterations"]) == 2 and sol.iterations == rescue["iterations"][1]
+    assert sol.ipopt_seconds_total > sol.solve_seconds + rescue["seconds"] / 2
+    asked = solver.solve(guess=far, continuation=["order2"])
+    assert asked.success and "rescue" not in asked.diagnostics
+    hopeless = og.compile_problem(heavy_top(), N=64, scheme="order4",
+                                  ipopt={"max_iter": 5}).solve(guess=far)
+    assert not hopeless.success and not hopeless.diagnostics["rescue"]["rescued"]
+    assert "tried order2 on the same grid first" in hopeless.hint
+
+
 @pytest.mark.parametrize("continuation, expected", [
     (["order2", "order4"], "must differ from each other and from the solve's own (order4)"),
     (["order3"], "unknown scheme 'order3'; choose one of order2, order4")])

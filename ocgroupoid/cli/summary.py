@@ -28,6 +28,7 @@ def summary(sol: Any) -> Table:
     t.add_row("solver time, this solution", f"{sol.solve_seconds * 1e3:.1f} ms ({sol.backend})")
     runs = [f"{sol.starts} starts" if sol.starts > 1 else "",
             "grids" if d.get("continuation") or "error_estimate" in d else "",
+            f"a rescue through {d['rescue']['scheme']}" if "rescue" in d else "",
             "phases" if d.get("adaptive", {}).get("used") else ""]
     if sol.ipopt_seconds_total > sol.solve_seconds * (1 + 1e-9) or sol.starts > 1:
         t.add_row("solver time, every run", f"{sol.ipopt_seconds_total * 1e3:.1f} ms ("
@@ -72,6 +73,8 @@ def summary(sol: Any) -> Table:
             t.add_row("schemes tried", ", ".join(
                 f"{k} {'met' if v['met'] else v['stopped']} ({v['ipopt_seconds']:.2f} s IPOPT)"
                 for k, v in acc["schemes"].items()))
+    if d.get("rescue", {}).get("rescued"):  # a failed rescue is told by the hint
+        t.add_row("rescued", f"{d['rescue']['message']} ({d['rescue']['seconds']:.2f} s)")
     if len(sol.minima) > 1:
         where = " (of the starts, before the adaptive steps)" if \
             d.get("adaptive", {}).get("used") else ""

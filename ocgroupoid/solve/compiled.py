@@ -7,6 +7,7 @@ feasible result and lists the distinct minima met. ``continuation`` solves on co
 first and interpolates each solution onto the next grid as its initial guess; it may also
 name cheaper schemes solved first on the final grid (``order2`` before ``order4``: a start
 far from the optimum converges in the cheap scheme, the costly one then takes a few steps).
+A final grid whose every start failed is rescued that way unasked.
 """
 
 from __future__ import annotations
@@ -20,9 +21,11 @@ import numpy as np
 from ..errors import ConfigError
 from ..model.problem import Problem
 from ..nlp import mesh
+from ..nlp.backends import INTERRUPTED, TIMED_OUT
 from ..nlp.method import Discretization, Method
 from ..nlp.options import SolverOptions
 from ..nlp.program import Guess
+from ..nlp.schemes import SCHEMES
 from ..nlp.shortcuts import choose
 from ..nlp.transcription import RawResult, Transcription
 from ..nlp.watch import Listener
@@ -126,6 +129,10 @@ class CompiledProblem:
             return self.transcription
         if (N, scheme) not in self._coarse:
             disc = replace(self.disc, N=N, scheme=scheme or self.disc.scheme)
+            if scheme is not None and not SCHEMES[scheme][self.problem.order].adaptive_steps:
+                # a start on the way (continuation, rescue): uniform steps, bounds at the
+                # scheme's own points; the adaptive steps are placed on the final solve
+                disc = replace(disc, steps="uniform", bound_points=0)
             self._coarse[N, scheme] = Transcription(self.problem, disc, self.options)
         return self._coarse[N, scheme]
 
@@ -158,7 +165,9 @@ class CompiledProblem:
         coarser N solved first, in order, then the schemes it names on this N (e.g.
         ``[16, "order2"]``); the last of them gives the Solution a Richardson
         estimate of its cost error (:attr:`Solution.error_estimate`); both default to the
-        solver options'. ``replay``: drive the controls
+        solver options'. When every start of the final grid fails of itself, a scheme with a
+        cheaper sibling (:attr:`Scheme.rescue`: order2 for order4) is rescued through it
+        (:meth:`_rescue`, ``diagnostics["rescue"]``). ``replay``: drive the controls
         through the continuous dynamics (a few ms; it decides whether the plan lands,
         ``replay_tolerance``). ``progress`` hears each start and, every 0.25 s, IPOPT's
         iteration. Ctrl-C stops the solve with the best point so far, ``status: interrupted``.
@@ -197,6 +206,7 @@ class CompiledProblem:
         coarse = prev  # the grid of this scheme solved before the last one (continuation)
         same = prev  # the last grid solved with this scheme
         notes: list[str] = []  # continuation grids that landed above a coarser minimum
+        rescue: dict[str, Any] | None = None  # diagnostics["rescue"]
         self._spent = 0.0  # solver seconds of every run of this solve: starts, grids, phases
         adaptive: dict[str, Any] = {}
         deadline = time.monotonic() + self.max_seconds
@@ -207,16 +217,23 @@ class CompiledProblem:
             for n, scheme in plan:
                 tr = self._at(n, scheme)
                 p = tr.pack(params, initial, final, T)
-                if prev is not None:
-                    starts = [interpolate(prev[0], prev[1].x, prev[1].p, n)]
-                elif given is not None:
-                    starts = [as_guess(given, tr, p)]
-                else:
-                    starts = self.guesses(tr, p, multistart)
+                starts = self._starts_of(tr, p, prev, given, multistart)
                 level, report = self._starts(tr, starts, p, progress, interrupt, deadline)
+                best = min(level, key=lambda r: (not r.success, r.cost))
+                if scheme is None and n == self.disc.N and not schemes and \
+                        tr.scheme.rescue is not None and not best.success and \
+                        _rescuable(level[0]) and not _whole_point(given) and \
+                        not interrupt.requested and \
+                        time.monotonic() < deadline:
+                    via = self._at(n, tr.scheme.rescue)
+                    pv = via.pack(params, initial, final, T)
+                    rescued, rescue = self._rescue(
+                        tr, p, via, pv, self._starts_of(via, pv, prev, given, False)[0],
+                        level[0], progress, interrupt, deadline)
+                    if rescued is not None:
+                        best, level = rescued, [*level, rescued]
                 if prev is None:
                     results, multi = level, report
-                best = min(level, key=lambda r: (not r.success, r.cost))
                 if scheme is None and same is not None and not interrupt.requested and \
                         _higher(best, same[1], CONTINUATION_GAP):  # against this scheme's
                     best, note = self._bridge(same, n, best, params, initial, final, T, progress)
@@ -248,6 +265,11 @@ class CompiledProblem:
                 solution.diagnostics["verdict"]["failures"].append(why)
         if multi["starts"] > 1:
             solution.diagnostics["multistart"] = multi
+        if rescue is not None:
+            solution.diagnostics["rescue"] = rescue
+            if not solution.success:
+                solution = replace(solution, hint="; ".join(
+                    filter(None, [rescue["message"], solution.hint])))
         if notes:
             solution.diagnostics["continuation"] = notes
             solution = replace(solution, hint="; ".join([*notes, *filter(None, [solution.hint])]))
@@ -258,6 +280,51 @@ class CompiledProblem:
                 best.cost, coarse[1].cost, tr.N, coarse[0].N, order, order)
         return replace(solution, starts=len(results),
                        ipopt_seconds_total=self._spent)
+
+    def _starts_of(self, tr: Transcription, p: np.ndarray,
+                   prev: tuple[Transcription, RawResult] | None, given: Any,
+                   multistart: bool | int) -> list[Guess]:
+        """The starts of one grid: the last grid's solution interpolated onto it, else the
+        guess given, else the geodesic (and with ``multistart`` every) guess."""
+        if prev is not None:
+            return [interpolate(prev[0], prev[1].x, prev[1].p, tr.N)]
+        if given is not None:
+            return [as_guess(given, tr, p)]
+        return self.guesses(tr, p, multistart)
+
+    def _rescue(self, tr: Transcription, p: np.ndarray, via: Transcription, pv: np.ndarray,
+                start: Guess, failed: RawResult, progress: Progress, interrupt: Interrupt,
+                deadline: float) -> tuple[RawResult | None, dict[str, Any]]:
+        """Every start of the final grid failed, the first (``failed``) of itself: solve the
+        cheaper scheme ``via`` (:attr:`Scheme.rescue`, order2 for order4) on the same grid
+        from the first start, then this grid from its solution (``continuation: [order2]``
+        after the fact: a start far from the optimum converges in the cheap scheme, and the
+        costly one then takes a few steps). The rescued run if it succeeded, else None; and
+        ``diagnostics["rescue"]``."""
+        name, other = tr.disc.scheme, via.disc.scheme
+        runs: list[RawResult] = []
+        for t, q in ((via, pv), (tr, p)):
+            g = interpolate(via, runs[0].x, runs[0].p, t.N) if runs else start
+            where = f"N={t.N}: {name} failed ({failed.status}), rescue: {t.disc.scheme}"
+            progress(where)
+            r = t.solve(g, q, _listener(where, progress, interrupt, None, deadline), deadline,
+                        lambda: interrupt.requested)
+            runs.append(parallel.timed(r, deadline))
+            self._spent += r.solve_seconds
+            if not r.success or interrupt.requested or time.monotonic() > deadline:
+                break
+        done = len(runs) == 2 and runs[1].success
+        what = (f"{name} failed from the start '{start.label}' ({failed.status}); "
+                + ("solved" if done else "tried") + f" {other} on the same grid first, then "
+                f"{name} from its solution: " + ", ".join(
+                    f"{t} {r.status} in {r.iterations} iterations"
+                    for t, r in zip((other, name), runs)))
+        report = {"message": what, "scheme": other, "failed": failed.status,
+                  "rescued": done, "iterations": [r.iterations for r in runs],
+                  "seconds": sum(r.solve_seconds for r in runs)}
+        if not done:
+            return None, report
+        return replace(runs[1], label=f"{start.label}, through {other}"), report
 
     def _starts(self, tr: Transcription, starts: list[Guess], p: np.ndarray,
                 progress: Progress, interrupt: Interrupt, deadline: float
@@ -383,6 +450,18 @@ class CompiledProblem:
 MESH_ROUNDS = 1
 #: landing misses (fractions of the distance covered) below this are exact for the comparison
 LANDING_FLOOR = 1e-10
+
+
+def _rescuable(r: RawResult) -> bool:
+    """Whether a failed run may be rescued through a cheaper scheme: it failed of itself,
+    not stopped by the time, an interrupt or a multi-start budget."""
+    return not r.success and r.status not in (TIMED_OUT, INTERRUPTED, "User_Requested_Stop")
+
+
+def _whole_point(guess: Any) -> bool:
+    """Whether a given guess is a point of one NLP (a warm start), which another scheme's
+    cannot start from."""
+    return isinstance(guess, Guess) and guess.x is not None
 
 
 def landing(tr: Transcription, r: RawResult) -> float:

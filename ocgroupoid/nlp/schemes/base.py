@@ -88,6 +88,9 @@ class Scheme(ABC):
     accuracy: ClassVar[int]  # the order at which costs and trajectories converge
     adaptive_steps: ClassVar[bool] = False  # whether its stages read per-interval steps
     variational: ClassVar[bool] = True  # whether it has discrete Euler-Lagrange equations
+    #: the cheaper scheme a failed solve is restarted through on the same grid (its solution
+    #: the start of this one; :meth:`~ocgroupoid.solve.CompiledProblem.solve`), or None
+    rescue: ClassVar[str | None] = None
     problem_order: ClassVar[int]  # 2: second-order problems (Ltilde); 1: first-order (l)
     summary: ClassVar[str]
 

@@ -37,6 +37,7 @@ class GaussStages(Scheme):
     accuracy = 4
     problem_order = 1
     adaptive_steps = True
+    rescue = "order2"
     summary = ("seed 003 §5.4: Runge-Kutta discrete Lagrangian, 2-stage Gauss, constraints "
                "at the stages")
 

@@ -106,6 +106,7 @@ class QuadraticGauss(Scheme):
     accuracy = 4
     problem_order = 2
     adaptive_steps = True
+    rescue = "order2"
     summary = ("piecewise-quadratic velocity, 3-point Gauss cost, Phi at the 2 Gauss points "
                "(Gauss-Legendre collocation), 4th-order Magnus step with exp")
 
