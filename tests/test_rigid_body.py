@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import casadi as ca
 import numpy as np
 import pytest
@@ -123,6 +125,33 @@ def test_continuation_matches_direct_solve() -> None:
     cont = og.compile_problem(pb, N=128).solve(continuation=[16, 32])
     assert cont.success and cont.discretization["start"] == "interpolated from N=32"
     assert cont.cost == pytest.approx(direct.cost, rel=1e-9)
+
+
+def test_a_failed_grid_is_not_continued_from(monkeypatch) -> None:
+    """A coarse grid that fails (here made to: its points replaced by garbage) is not the
+    next grid's start: the next grid starts from the guesses, as a direct solve does (same
+    iterations, same cost), and the note says so."""
+    pb = rigid_body()
+    solver = og.compile_problem(pb, N=32)
+    direct = solver.solve(multistart=False)
+    solve_starts = solver._starts
+
+    def failing(tr, starts, p, *rest):
+        level, report = solve_starts(tr, starts, p, *rest)
+        if tr.N == 16:
+            level = [replace(r, x=np.full_like(r.x, 1e3), success=False,
+                             status="Maximum_Iterations_Exceeded") for r in level]
+        return level, report
+
+    monkeypatch.setattr(solver, "_starts", failing)
+    sol = solver.solve(multistart=False, continuation=[16])
+    assert sol.success and sol.discretization["start"] == direct.discretization["start"]
+    assert sol.iterations == direct.iterations
+    assert sol.cost == pytest.approx(direct.cost, rel=1e-12)
+    assert sol.diagnostics["continuation"] == [
+        "continuation: order2 on N=16 failed (Maximum_Iterations_Exceeded); the next grid "
+        "starts from the guesses, not from it"]
+    assert "error_estimate" not in sol.diagnostics  # no estimate from a failed grid
 
 
 def test_terminal_condition_has_no_root_at_a_half_turn() -> None:

@@ -202,10 +202,11 @@ class CompiledProblem:
         results: list[RawResult] = []
         multi: dict[str, Any] = {}  # diagnostics["multistart"]
         given = guess
-        prev: tuple[Transcription, RawResult] | None = None
+        prev: tuple[Transcription, RawResult] | None = None  # the last grid: the result
+        source = prev  # the last grid solved: the next one starts from it
         coarse = prev  # the grid of this scheme solved before the last one (continuation)
         same = prev  # the last grid solved with this scheme
-        notes: list[str] = []  # continuation grids that landed above a coarser minimum
+        notes: list[str] = []  # continuation grids that failed or landed above a minimum
         rescue: dict[str, Any] | None = None  # diagnostics["rescue"]
         self._spent = 0.0  # solver seconds of every run of this solve: starts, grids, phases
         adaptive: dict[str, Any] = {}
@@ -214,31 +215,36 @@ class CompiledProblem:
             plan: list[tuple[int, str | None]] = [*((n, None) for n in levels),
                                                   *((self.disc.N, s) for s in schemes),
                                                   (self.disc.N, None)]
-            for n, scheme in plan:
+            for i, (n, scheme) in enumerate(plan):
                 tr = self._at(n, scheme)
                 p = tr.pack(params, initial, final, T)
-                starts = self._starts_of(tr, p, prev, given, multistart)
+                starts = self._starts_of(tr, p, source, given, multistart)
                 level, report = self._starts(tr, starts, p, progress, interrupt, deadline)
                 best = min(level, key=lambda r: (not r.success, r.cost))
-                if scheme is None and n == self.disc.N and not schemes and \
-                        tr.scheme.rescue is not None and not best.success and \
-                        _rescuable(level[0]) and not _whole_point(given) and \
-                        not interrupt.requested and \
-                        time.monotonic() < deadline:
+                if i == len(plan) - 1 and not schemes and tr.scheme.rescue is not None and \
+                        _rescuable(level) and not _whole_point(given) and \
+                        not interrupt.requested and time.monotonic() < deadline:
                     via = self._at(n, tr.scheme.rescue)
                     pv = via.pack(params, initial, final, T)
                     rescued, rescue = self._rescue(
-                        tr, p, via, pv, self._starts_of(via, pv, prev, given, False)[0],
+                        tr, p, via, pv, self._starts_of(via, pv, source, given, False)[0],
                         level[0], progress, interrupt, deadline)
                     if rescued is not None:
                         best, level = rescued, [*level, rescued]
-                if prev is None:
+                if i == 0:
                     results, multi = level, report
                 if scheme is None and same is not None and not interrupt.requested and \
                         _higher(best, same[1], CONTINUATION_GAP):  # against this scheme's
                     best, note = self._bridge(same, n, best, params, initial, final, T, progress)
                     notes.append(note)
                 prev = (tr, best)
+                if best.success:
+                    source = prev
+                elif i < len(plan) - 1 and not interrupt.requested:
+                    notes.append(f"continuation: {tr.disc.scheme} on N={n} failed "
+                                 f"({best.status}); the next grid starts from "
+                                 + (f"N={source[0].N} ({source[0].disc.scheme}), the last "
+                                    "solved" if source else "the guesses, not from it"))
                 if scheme is None:
                     coarse, same = same, prev
                 if interrupt.requested or time.monotonic() > deadline:
@@ -282,12 +288,12 @@ class CompiledProblem:
                        ipopt_seconds_total=self._spent)
 
     def _starts_of(self, tr: Transcription, p: np.ndarray,
-                   prev: tuple[Transcription, RawResult] | None, given: Any,
+                   source: tuple[Transcription, RawResult] | None, given: Any,
                    multistart: bool | int) -> list[Guess]:
-        """The starts of one grid: the last grid's solution interpolated onto it, else the
-        guess given, else the geodesic (and with ``multistart`` every) guess."""
-        if prev is not None:
-            return [interpolate(prev[0], prev[1].x, prev[1].p, tr.N)]
+        """The starts of one grid: the last solved grid's solution interpolated onto it,
+        else the guess given, else the geodesic (and with ``multistart`` every) guess."""
+        if source is not None:
+            return [interpolate(source[0], source[1].x, source[1].p, tr.N)]
         if given is not None:
             return [as_guess(given, tr, p)]
         return self.guesses(tr, p, multistart)
@@ -452,10 +458,12 @@ MESH_ROUNDS = 1
 LANDING_FLOOR = 1e-10
 
 
-def _rescuable(r: RawResult) -> bool:
-    """Whether a failed run may be rescued through a cheaper scheme: it failed of itself,
-    not stopped by the time, an interrupt or a multi-start budget."""
-    return not r.success and r.status not in (TIMED_OUT, INTERRUPTED, "User_Requested_Stop")
+def _rescuable(level: list[RawResult]) -> bool:
+    """Whether a grid's failure may be rescued through a cheaper scheme: every start failed,
+    the first of itself (not stopped by the time or an interrupt; the further starts may
+    have been stopped by their budget)."""
+    return not any(r.success for r in level) and \
+        level[0].status not in (TIMED_OUT, INTERRUPTED, "User_Requested_Stop")
 
 
 def _whole_point(guess: Any) -> bool:
