@@ -182,9 +182,12 @@ def test_order4_from_the_long_way_round_continues_through_order2() -> None:
     assert sol.success and sol.discretization["scheme"] == "order4"
     assert sol.cost == pytest.approx(natural.cost, rel=1e-9)
     assert "error_estimate" not in sol.diagnostics
+    assert sol.diagnostics["minima_grid"] == {"N": 64, "scheme": "order2"}
+    assert "minima_grid" not in natural.diagnostics
     coarse_too = solver.solve(multistart=False, continuation=[32, "order2"])
     assert coarse_too.success and coarse_too.cost == pytest.approx(natural.cost, rel=1e-9)
     assert coarse_too.diagnostics["error_estimate"]["N"] == [32, 64]  # order4's grids
+    assert coarse_too.diagnostics["minima_grid"] == {"N": 32, "scheme": "order4"}
 
 
 def test_a_failed_order4_solve_is_rescued_through_order2() -> None:

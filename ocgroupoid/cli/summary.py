@@ -76,7 +76,9 @@ def summary(sol: Any) -> Table:
     if d.get("rescue", {}).get("rescued"):  # a failed rescue is told by the hint
         t.add_row("rescued", f"{d['rescue']['message']} ({d['rescue']['seconds']:.2f} s)")
     if len(sol.minima) > 1:
-        where = " (of the starts, before the adaptive steps)" if \
+        grid = d.get("minima_grid")
+        where = f" (of the starts, on the first grid: {grid['scheme']}, N={grid['N']})" \
+            if grid else " (of the starts, before the adaptive steps)" if \
             d.get("adaptive", {}).get("used") else ""
         t.add_row("local minima" + where, ", ".join(f"{m['cost']:.6g} ({m['label']})"
                                                     for m in sol.minima))

@@ -271,6 +271,9 @@ class CompiledProblem:
                 solution.diagnostics["verdict"]["failures"].append(why)
         if multi["starts"] > 1:
             solution.diagnostics["multistart"] = multi
+        if len(plan) > 1:  # the minima are the first grid's starts'
+            solution.diagnostics["minima_grid"] = {"N": plan[0][0],
+                                                   "scheme": plan[0][1] or self.disc.scheme}
         if rescue is not None:
             solution.diagnostics["rescue"] = rescue
             if not solution.success:
