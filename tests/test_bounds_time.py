@@ -95,14 +95,21 @@ def test_adaptive_steps_put_a_node_on_the_switch(N: int) -> None:
 
 
 def test_adaptive_steps_continue_through_order2() -> None:
-    """order2 cannot place adaptive steps; as a start on the way (``continuation:
-    [order2]``, and the rescue of a failed order4) it is solved on uniform steps, and order4
-    then places the steps: T exact, as without it."""
+    """order2 cannot place adaptive steps nor hold bounds between its nodes; as a start on
+    the way (``continuation: [order2]``, and the rescue of a failed order4) it is solved on
+    uniform steps with the bounds at its nodes, and order4 then places the steps: T exact,
+    as without it; and holds the bounds at its extra points."""
     sol = og.solve(minimum_time(), N=17, scheme="order4", steps="adaptive",
                    continuation=["order2"])
     assert solved_but_degenerate(sol), (sol.status, sol.hint)
     assert sol.diagnostics["adaptive"]["used"]
     assert abs(sol.T - T_STAR) <= 1e-6, sol.T
+    more = og.solve(minimum_time(), N=17, scheme="order4", bound_points=2,
+                    continuation=["order2"])
+    plain = og.solve(minimum_time(), N=17, scheme="order4", bound_points=2)
+    assert solved_but_degenerate(more), (more.status, more.hint)
+    assert more.T == pytest.approx(plain.T, rel=1e-8)
+    assert more.diagnostics["bound_points"] == plain.diagnostics["bound_points"]
 
 
 def test_adaptive_steps_need_interval_stages() -> None:
