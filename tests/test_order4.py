@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from rich.console import Console
 from scipy.integrate import solve_ivp
 from scipy.interpolate import PPoly
 from typer.testing import CliRunner
@@ -17,6 +18,7 @@ from typer.testing import CliRunner
 import ocgroupoid as og
 from ocgroupoid import files
 from ocgroupoid.cli import app
+from ocgroupoid.cli.summary import summary
 from ocgroupoid.errors import ConfigError
 from ocgroupoid.solve import interpolate
 from ocgroupoid.systems.heavy_top import heavy_top
@@ -209,6 +211,11 @@ def test_a_failed_order4_solve_is_rescued_through_order2() -> None:
     assert rescue["failed"] == "Maximum_Iterations_Exceeded"
     assert len(rescue["iterations"]) == 2 and sol.iterations == rescue["iterations"][1]
     assert sol.ipopt_seconds_total > sol.solve_seconds + rescue["seconds"] / 2
+    console = Console(width=300, record=True)
+    console.print(summary(sol))
+    table = console.export_text()
+    assert "(a rescue through order2)" in table and "│ rescued " in table
+    assert "then order4 from its solution: order2 Solve_Succeeded in" in table
     asked = solver.solve(guess=far, continuation=["order2"])
     assert asked.success and "rescue" not in asked.diagnostics
     hopeless = og.compile_problem(heavy_top(), N=64, scheme="order4",

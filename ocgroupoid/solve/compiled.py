@@ -229,8 +229,7 @@ class CompiledProblem:
                     rescued, rescue = self._rescue(
                         tr, p, via, pv, self._starts_of(via, pv, source, given, False)[0],
                         level[0], progress, interrupt, deadline)
-                    if rescued is not None:
-                        best, level = rescued, [*level, rescued]
+                    best = rescued or best
                 if i == 0:
                     results, multi = level, report
                 if scheme is None and same is not None and not interrupt.requested and \
