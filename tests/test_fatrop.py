@@ -13,9 +13,11 @@ import ocgroupoid as og
 from ocgroupoid import files
 from ocgroupoid.errors import ConfigError
 from ocgroupoid.nlp.assembly import Block, Kind
+from ocgroupoid.nlp.backends import Backend, Run, Start, in_turn
 from ocgroupoid.nlp.schemes.base import stage_function
 from ocgroupoid.nlp.stageform import NotStaged, StageForm, stage_form
 from ocgroupoid.solve import compile_problem
+from ocgroupoid.systems.heavy_top import heavy_top
 
 ROOT = Path(__file__).resolve().parent.parent
 PROBLEMS = sorted((ROOT / "problems").glob("*.yaml"))
@@ -190,3 +192,67 @@ def test_fatrop_reads_the_ipopt_options_it_shares() -> None:
     p = tr.pack()
     guess = tr.guesses(p)[0]
     assert tr.solve(guess, p).iterations <= ipopt.solve(guess, p).iterations
+
+
+# ------------------------------------------------------------------ the rescue in the turn
+
+class Scripted(Backend):
+    """A backend that returns a given status (and counts its runs)."""
+
+    def __init__(self, name: str, status: str, success: bool) -> None:
+        self.name, self.status, self.success, self.runs = name, status, success, 0  # type: ignore[misc]
+
+    def run(self, start: Start) -> Run:
+        self.runs += 1
+        return Run(start.x0, 1.0, np.zeros(1), np.zeros(1), self.status, self.success, 3, 0.5)
+
+    def graph(self, *args):  # pragma: no cover  (not exported)
+        raise NotImplementedError
+
+
+@pytest.mark.parametrize("first_status, rescued, expected, runs", [
+    ("Fatrop_Failed", True, "fatrop through order2", (1, 1, 0)),
+    ("Fatrop_Failed", False, "ipopt after order2 rescue after fatrop", (1, 1, 1)),
+    ("Solve_Succeeded", True, "fatrop", (1, 0, 0)),
+    ("Maximum_WallTime_Exceeded", True, "fatrop", (1, 0, 0)),
+])
+def test_the_rescue_runs_between_fatrops_failure_and_ipopt(
+        first_status: str, rescued: bool, expected: str, runs: tuple) -> None:
+    """``in_turn``'s rescue: after the first backend failed of itself, before the next; its
+    run is the answer when it succeeded; not after a success or a run out of time. The
+    seconds count every run."""
+    fatrop = Scripted("fatrop", first_status, first_status == "Solve_Succeeded")
+    ipopt = Scripted("ipopt", "Solve_Succeeded", True)
+    calls = []
+
+    def rescue(start: Start) -> tuple[Run, str]:
+        calls.append(start)
+        run = Run(start.x0, 2.0, np.zeros(1), np.zeros(1),
+                  "Solve_Succeeded" if rescued else "Fatrop_Failed", rescued, 4, 0.25)
+        return run, "fatrop through order2" if rescued else "order2 rescue"
+
+    run, label = in_turn([fatrop, ipopt], Start(np.zeros(1), np.zeros(0)), lambda x, p: 0.0,
+                         rescue)
+    assert label == expected
+    assert (fatrop.runs, len(calls), ipopt.runs) == runs
+    assert run.seconds == pytest.approx(0.5 * (fatrop.runs + ipopt.runs) + 0.25 * len(calls))
+
+
+def test_the_first_start_fatrop_fails_on_is_rescued_through_order2() -> None:
+    """The heavy top from the great circle the long way round, N=96: fatrop fails (12
+    iterations), and before IPOPT's fallback fatrop solves order2 from the same start and
+    order4 from its solution: verified, in the minimum another start finds directly (the
+    natural start finds a higher one), labelled by who solved it."""
+    solver = og.compile_problem(heavy_top(), N=96, scheme="order4", backend="fatrop")
+    tr = solver.transcription
+    p = tr.pack()
+    far = next(g for g in solver.guesses(tr, p, True) if g.label == "great circle, long way")
+    assert not tr.fatrop.run(Start(tr.point(far, p), p)).success  # the premise
+    sol = solver.solve(guess=far)
+    assert sol.success and sol.backend == "fatrop through order2"
+    spun = next(g for g in solver.guesses(tr, p, True)
+                if g.label == "great circle, rotor 1 spun +")
+    best = solver.solve(guess=spun)  # the multi-start's best minimum
+    assert best.success and best.backend == "fatrop"
+    assert sol.cost == pytest.approx(best.cost, rel=1e-8)
+    assert sol.solve_seconds == sol.ipopt_seconds_total  # one start, every run counted

@@ -21,6 +21,7 @@ from ..model.problem import Problem
 from . import backends
 from .backends import FatropBackend, IpoptBackend, Start, in_turn, ipopt_options
 from .backends.base import never
+from .backends.policy import Rescue
 from .method import Method
 from .options import SolverOptions
 from .program import Guess, NonlinearProgram
@@ -77,7 +78,8 @@ class Transcription(NonlinearProgram):
 
     def solve(self, guess: Guess, p: np.ndarray | None = None,
               listener: Listener | None = None, deadline: float | None = None,
-              stop: Callable[[], bool] | None = None) -> RawResult:
+              stop: Callable[[], bool] | None = None, rescue: Rescue | None = None
+              ) -> RawResult:
         """Run the backends from ``guess`` with parameters ``p`` (default: the problem's).
         With IPOPT, ``listener(iteration, objective, infeasibility)`` hears every iteration
         and stops IPOPT by returning True (status ``User_Requested_Stop``), and a guess with
@@ -85,21 +87,29 @@ class Transcription(NonlinearProgram):
         from the guess's primal point, in a helper process that is stopped at ``deadline``
         (``time.monotonic()``; default: :attr:`max_seconds` from now), after repeated NaN
         evaluations, or once ``stop()`` is true; when it fails IPOPT solves from the same
-        start with the time left (:func:`~ocgroupoid.nlp.backends.policy.in_turn`). A run
-        that used up the time has status ``Maximum_WallTime_Exceeded``."""
-        p = self.pack() if p is None else np.asarray(p, dtype=float)
-        if guess.T is not None and self.problem.T_free and guess.x is None:
-            p = p.copy()
-            p[self.layout.p_slices["T"]] = guess.T
-        x0 = guess.x if guess.x is not None and guess.x.size == self.nx else self.point(guess, p)
+        start with the time left (:func:`~ocgroupoid.nlp.backends.policy.in_turn`), after
+        ``rescue`` if given. A run that used up the time has status
+        ``Maximum_WallTime_Exceeded``."""
+        x0, p = self.start_point(guess, self.pack() if p is None else p)
         if deadline is None:
             deadline = time.monotonic() + self.max_seconds
         warm = self._warm(guess)
         start = Start(x0, p, guess.lam_g if warm else None, guess.lam_x if warm else None,
                       listener, deadline, stop or never)
-        run, label = in_turn(self.backends, start, lambda x, p: float(self.f_fun(x, p)))
+        run, label = in_turn(self.backends, start, lambda x, p: float(self.f_fun(x, p)),
+                             rescue)
         return RawResult(guess.label, run.x, p, run.lam_g, run.f, run.status, run.success,
                          run.iterations, run.seconds, run.lam_x, label)
+
+    def start_point(self, guess: Guess, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The NLP point a solve starts from, and its parameters: a free horizon's guess is
+        the guess's T when it has one (a coarser grid's solved T)."""
+        p = np.asarray(p, dtype=float)
+        if guess.T is not None and self.problem.T_free and guess.x is None:
+            p = p.copy()
+            p[self.layout.p_slices["T"]] = guess.T
+        x0 = guess.x if guess.x is not None and guess.x.size == self.nx else self.point(guess, p)
+        return x0, p
 
     def solve_graph(self, x0: ca.MX, p: ca.MX, lam_g0: ca.MX | None = None,
                     lam_x0: ca.MX | None = None) -> dict[str, ca.MX]:

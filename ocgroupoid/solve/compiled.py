@@ -7,7 +7,8 @@ feasible result and lists the distinct minima met. ``continuation`` solves on co
 first and interpolates each solution onto the next grid as its initial guess; it may also
 name cheaper schemes solved first on the final grid (``order2`` before ``order4``: a start
 far from the optimum converges in the cheap scheme, the costly one then takes a few steps).
-A final grid whose every start failed is rescued that way unasked.
+A final grid whose every start failed is rescued that way unasked; with fatrop the first
+start is, between fatrop's failure and IPOPT's fallback.
 """
 
 from __future__ import annotations
@@ -21,7 +22,8 @@ import numpy as np
 from ..errors import ConfigError
 from ..model.problem import Problem
 from ..nlp import mesh
-from ..nlp.backends import INTERRUPTED, TIMED_OUT
+from ..nlp.backends import INTERRUPTED, TIMED_OUT, Run, Start
+from ..nlp.backends.policy import Rescue
 from ..nlp.method import Discretization, Method
 from ..nlp.options import SolverOptions
 from ..nlp.program import Guess
@@ -43,6 +45,10 @@ Progress = Callable[[str], None]
 #: needs far more is on its way to a worse minimum or nowhere (it is stopped, not counted)
 START_BUDGET = (30, 3)
 PROGRESS_EVERY = 0.25  # seconds between two reports of IPOPT's iterations
+#: the iterations the cheap scheme of fatrop's rescue (:meth:`CompiledProblem._through`) has:
+#: the heavy top from the long way round needs 34-35 of order2's at N = 64-128, where the
+#: reaction wheels' long way round, which order2 cannot solve either, took 257 (1.2 s) to fail
+RESCUE_ITERATIONS = 100
 
 
 def _noop(_: str) -> None:
@@ -120,21 +126,25 @@ class CompiledProblem:
         self.max_seconds = options.max_seconds
         self.disc = Discretization.of(method)
         self.transcription = Transcription(problem, self.disc, options)
-        self._coarse: dict[tuple[int, str | None], Transcription] = {}
+        self._coarse: dict[tuple[int, str | None, int | None], Transcription] = {}
         self._phased: dict[tuple[Any, ...], Transcription] = {}
 
-    def _at(self, N: int, scheme: str | None = None) -> Transcription:
-        """The transcription on N intervals, with another scheme (continuation) if given."""
-        if N == self.disc.N and scheme is None:
+    def _at(self, N: int, scheme: str | None = None, max_iter: int | None = None
+            ) -> Transcription:
+        """The transcription on N intervals, with another scheme (continuation) and another
+        iteration limit (a rescue) if given."""
+        if N == self.disc.N and scheme is None and max_iter is None:
             return self.transcription
-        if (N, scheme) not in self._coarse:
+        if (N, scheme, max_iter) not in self._coarse:
             disc = replace(self.disc, N=N, scheme=scheme or self.disc.scheme)
             if scheme is not None and not SCHEMES[scheme][self.problem.order].adaptive_steps:
                 # a start on the way (continuation, rescue): uniform steps, bounds at the
                 # scheme's own points; the adaptive steps are placed on the final solve
                 disc = replace(disc, steps="uniform", bound_points=0)
-            self._coarse[N, scheme] = Transcription(self.problem, disc, self.options)
-        return self._coarse[N, scheme]
+            options = self.options if max_iter is None else \
+                replace(self.options, ipopt={**self.options.ipopt, "max_iter": max_iter})
+            self._coarse[N, scheme, max_iter] = Transcription(self.problem, disc, options)
+        return self._coarse[N, scheme, max_iter]
 
     def guesses(self, tr: Transcription, p: np.ndarray, multistart: bool | int) -> list[Guess]:
         """The first geodesic guess; with ``multistart`` every geodesic guess, the model's own
@@ -167,7 +177,8 @@ class CompiledProblem:
         estimate of its cost error (:attr:`Solution.error_estimate`); both default to the
         solver options'. When every start of the final grid fails of itself, a scheme with a
         cheaper sibling (:attr:`Scheme.rescue`: order2 for order4) is rescued through it
-        (:meth:`_rescue`, ``diagnostics["rescue"]``). ``replay``: drive the controls
+        (:meth:`_rescue`, ``diagnostics["rescue"]``); with fatrop, the first start is, before
+        IPOPT's fallback (:meth:`_through`, backend ``fatrop through order2``). ``replay``: drive the controls
         through the continuous dynamics (a few ms; it decides whether the plan lands,
         ``replay_tolerance``). ``progress`` hears each start and, every 0.25 s, IPOPT's
         iteration. Ctrl-C stops the solve with the best point so far, ``status: interrupted``.
@@ -219,10 +230,15 @@ class CompiledProblem:
                 tr = self._at(n, scheme)
                 p = tr.pack(params, initial, final, T)
                 starts = self._starts_of(tr, p, source, given, multistart)
-                level, report = self._starts(tr, starts, p, progress, interrupt, deadline)
+                cheaper = tr.scheme.rescue
+                rescues = i == len(plan) - 1 and not schemes and cheaper is not None and \
+                    not _whole_point(given)
+                through = self._through(tr, cheaper, (params, initial, final, T)) \
+                    if rescues and cheaper and tr.fatrop is not None else None
+                level, report = self._starts(tr, starts, p, progress, interrupt, deadline,
+                                             through)
                 best = min(level, key=lambda r: (not r.success, r.cost))
-                if i == len(plan) - 1 and not schemes and tr.scheme.rescue is not None and \
-                        _rescuable(level) and not _whole_point(given) and \
+                if rescues and tr.fatrop is None and _rescuable(level) and \
                         not interrupt.requested and time.monotonic() < deadline:
                     via = self._at(n, tr.scheme.rescue)
                     pv = via.pack(params, initial, final, T)
@@ -334,12 +350,37 @@ class CompiledProblem:
             return None, report
         return replace(runs[1], label=f"{start.label}, through {other}"), report
 
+    def _through(self, tr: Transcription, name: str, pack: tuple[Any, ...]) -> Rescue:
+        """The rescue of a start fatrop failed on (:func:`~ocgroupoid.nlp.backends.in_turn`,
+        before IPOPT's fallback): fatrop on the scheme ``name`` (order2) on the same grid from
+        the start's velocities (built on first use, also in a worker), then fatrop again from
+        its solution; the run in ``tr``'s variables. The cheap scheme gets fatrop alone, and
+        :data:`RESCUE_ITERATIONS`: where it fails too the start is hopeless more often than
+        not, and IPOPT's fallback follows anyway."""
+        fatrop = tr.backends[0]
+
+        def rescue(start: Start) -> tuple[Run, str]:
+            via = self._at(tr.N, name, RESCUE_ITERATIONS)
+            x0, pv = via.start_point(interpolate(tr, start.x0, start.p, tr.N), via.pack(*pack))
+            cheap = via.backends[0].run(replace(start, x0=x0, p=pv, lam_g0=None, lam_x0=None))
+            if not cheap.success:
+                return replace(cheap, x=start.x0, f=float("nan"), lam_g=np.zeros(tr.ng),
+                               lam_x=np.zeros(tr.nx)), f"{name} rescue"
+            x0, _ = tr.start_point(interpolate(via, cheap.x, pv, tr.N), start.p)
+            run = fatrop.run(replace(start, x0=x0, lam_g0=None, lam_x0=None))
+            run = replace(run, seconds=run.seconds + cheap.seconds)
+            return run, f"{fatrop.name} through {name}" if run.success else f"{name} rescue"
+
+        return rescue
+
     def _starts(self, tr: Transcription, starts: list[Guess], p: np.ndarray,
-                progress: Progress, interrupt: Interrupt, deadline: float
-                ) -> tuple[list[RawResult], dict[str, Any]]:
+                progress: Progress, interrupt: Interrupt, deadline: float,
+                rescue: Rescue | None = None) -> tuple[list[RawResult], dict[str, Any]]:
         """The starts of one grid, in order, on worker processes (``options.workers``,
         :mod:`~ocgroupoid.solve.parallel`) or in turn, each after the first with
-        :data:`START_BUDGET` iterations; none started after Ctrl-C or the deadline. With
+        :data:`START_BUDGET` iterations; none started after Ctrl-C or the deadline. The
+        first, which has no budget, has ``rescue`` between fatrop's failure and IPOPT's
+        fallback (:meth:`_through`); the others' fallback is bounded by their budget. With
         ``diagnostics["multistart"]``: the starts asked for and finished, the workers, the
         wall time of all, the sum of their solver times, and the best start's."""
         t0 = time.perf_counter()
@@ -351,14 +392,15 @@ class CompiledProblem:
         failed: list[dict[str, Any]] = []
         if workers > 1:
             level, failed = parallel.run(tr, starts, p, workers, where, progress, interrupt,
-                                         deadline, START_BUDGET, PROGRESS_EVERY)
+                                         deadline, START_BUDGET, PROGRESS_EVERY, rescue)
         else:
             level = []
             budget: int | None = None  # iterations of a further start
             for i, g in enumerate(starts):
                 progress(where(i))
                 r = tr.solve(g, p, _listener(where(i), progress, interrupt, budget, deadline),
-                             deadline, lambda: interrupt.requested)
+                             deadline, lambda: interrupt.requested,
+                             rescue if i == 0 else None)
                 level.append(parallel.timed(r, deadline))
                 if interrupt.requested or time.monotonic() > deadline:
                     break

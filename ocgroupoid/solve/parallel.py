@@ -54,6 +54,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from ..nlp.backends import TIMED_OUT, IpoptBackend
+from ..nlp.backends.policy import Rescue
 from ..nlp.program import Guess
 from ..nlp.transcription import RawResult, Transcription
 from .interrupt import Interrupt
@@ -161,9 +162,11 @@ def _listener(conn: Connection, i: int, deadline: float, shared: _Shared,
     return listen
 
 
-def _serve(conn: Connection, tr: Transcription, shared: _Shared) -> None:
-    """A worker's loop: solve each start sent, answer ``done`` with its result or ``error``
-    with what it raised; end on None, or when the solving process is gone."""
+def _serve(conn: Connection, tr: Transcription, shared: _Shared,
+           rescue: Rescue | None) -> None:
+    """A worker's loop: solve each start sent (the first with ``rescue``), answer ``done``
+    with its result or ``error`` with what it raised; end on None, or when the solving
+    process is gone."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the solving process's
     while True:
         while not conn.poll(1.0):
@@ -176,7 +179,7 @@ def _serve(conn: Connection, tr: Transcription, shared: _Shared) -> None:
         waited = [0.0]
         try:
             r = tr.solve(guess, p, _listener(conn, i, deadline, shared, waited), deadline,
-                         shared.stop.is_set)
+                         shared.stop.is_set, rescue if i == 0 else None)
             conn.send(("done", i, replace(r, solve_seconds=r.solve_seconds - waited[0])))
         except Exception as err:  # noqa: BLE001  (reported as a failed start)
             conn.send(("error", i, f"{type(err).__name__}: {err}"))
@@ -191,7 +194,7 @@ def _failed(tr: Transcription, guess: Guess, p: np.ndarray, why: str) -> RawResu
 
 def run(tr: Transcription, starts: Sequence[Guess], p: np.ndarray, workers: int,
         where: Callable[[int], str], progress: Callable[[str], None], interrupt: Interrupt,
-        deadline: float, rule: tuple[int, int], every: float
+        deadline: float, rule: tuple[int, int], every: float, rescue: Rescue | None = None
         ) -> tuple[list[RawResult], list[dict[str, Any]]]:
     """Solve ``starts`` on ``workers`` forked processes (module docstring): the results of
     the starts that ran, in their order, and the starts that failed in a worker (number from
@@ -211,7 +214,7 @@ def run(tr: Transcription, starts: Sequence[Guess], p: np.ndarray, workers: int,
         warnings.simplefilter("ignore", DeprecationWarning)
         for _ in range(workers):
             mine, theirs = ctx.Pipe()
-            proc = ctx.Process(target=_serve, args=(theirs, tr, shared), daemon=True)
+            proc = ctx.Process(target=_serve, args=(theirs, tr, shared, rescue), daemon=True)
             proc.start()
             theirs.close()
             conns.append(mine)

@@ -4,6 +4,8 @@
 stage's reduced Hessian positive definite and regularises until it is: slow or stuck on
 some nonconvex problems) IPOPT from the same start with the time left. A run that used up
 the time, or was interrupted, ends the turn: the next backend would have no time either.
+Between the two a rescue may run (:class:`~ocgroupoid.solve.CompiledProblem` gives order4
+one: order2 on the same grid, then fatrop again from its solution).
 """
 
 from __future__ import annotations
@@ -17,13 +19,19 @@ from .base import INTERRUPTED, TIMED_OUT, Backend, Run, Start
 
 #: ``objective(x, p)``: the cost of a point, for a run stopped before it had one
 Objective = Callable[[np.ndarray, np.ndarray], float]
+#: ``rescue(start)``: another way from the same start, tried after the first backend failed
+#: and before the next one; its run and the label of who produced it, or None
+Rescue = Callable[[Start], "tuple[Run, str] | None"]
 
 
-def in_turn(backends: Sequence[Backend], start: Start, objective: Objective
-            ) -> tuple[Run, str]:
+def in_turn(backends: Sequence[Backend], start: Start, objective: Objective,
+            rescue: Rescue | None = None) -> tuple[Run, str]:
     """The run of the first backend that succeeds or is stopped by the time or an
     interrupt, else of the last; with the label of who produced it (``fatrop``,
-    ``ipopt``, ``ipopt after fatrop``). Its seconds count every run."""
+    ``ipopt``, ``ipopt after fatrop``). Its seconds count every run. ``rescue`` runs after
+    the first backend failed of itself, before the next: its run (in this NLP's variables)
+    is the answer if it succeeded (its label, e.g. ``fatrop through order2``) or was
+    stopped; else the next backend runs (``ipopt after order2 rescue after fatrop``)."""
     names: list[str] = []
     spent = 0.0
     for i, backend in enumerate(backends):
@@ -31,7 +39,17 @@ def in_turn(backends: Sequence[Backend], start: Start, objective: Objective
         names.insert(0, backend.name)
         spent += run.seconds
         last = i == len(backends) - 1
-        if last or run.success or run.status in (TIMED_OUT, INTERRUPTED):
+        stopped = run.status in (TIMED_OUT, INTERRUPTED)
+        if not (last or run.success or stopped) and i == 0 and rescue is not None:
+            rescued = rescue(start)
+            if rescued is not None:
+                run, label = rescued
+                spent += run.seconds
+                names.insert(0, label)
+                stopped = run.status in (TIMED_OUT, INTERRUPTED)
+                if run.success:
+                    return replace(run, seconds=spent), label
+        if last or run.success or stopped:
             if not run.success and not last:  # stopped: the cost of the point it reached
                 run = replace(run, f=objective(run.x, start.p))
             return replace(run, seconds=spent), " after ".join(names)
