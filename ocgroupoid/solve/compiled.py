@@ -178,11 +178,12 @@ class CompiledProblem:
         solver options'. When every start of the final grid fails of itself, a scheme with a
         cheaper sibling (:attr:`Scheme.rescue`: order2 for order4) is rescued through it
         (:meth:`_rescue`, ``diagnostics["rescue"]``); with fatrop, the first start is, before
-        IPOPT's fallback (:meth:`_through`, backend ``fatrop through order2``). ``replay``: drive the controls
-        through the continuous dynamics (a few ms; it decides whether the plan lands,
-        ``replay_tolerance``). ``progress`` hears each start and, every 0.25 s, IPOPT's
-        iteration. Ctrl-C stops the solve with the best point so far, ``status: interrupted``.
-        ``guess``: where to start instead of the geodesic guesses: an :class:`og.Guess`
+        IPOPT's fallback (:meth:`_through`, backend ``fatrop through order2``). ``replay``:
+        drive the controls through the continuous dynamics (a few ms; it decides whether the
+        plan lands, ``replay_tolerance``). ``progress`` hears each start and, every 0.25 s,
+        IPOPT's iteration. Ctrl-C stops the solve with the best point so far, ``status:
+        interrupted``. ``guess``: where to start instead of the geodesic guesses: an
+        :class:`og.Guess`
         (interval velocities, N x dim y), a Solution of the same problem on any grid or
         scheme (interpolated onto this one), or an array of interval velocities.
         ``warm``: a Solution of this compiled problem (same N and structure) to start from,
