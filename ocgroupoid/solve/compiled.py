@@ -183,9 +183,8 @@ class CompiledProblem:
         plan lands, ``replay_tolerance``). ``progress`` hears each start and, every 0.25 s,
         IPOPT's iteration. Ctrl-C stops the solve with the best point so far, ``status:
         interrupted``. ``guess``: where to start instead of the geodesic guesses: an
-        :class:`og.Guess`
-        (interval velocities, N x dim y), a Solution of the same problem on any grid or
-        scheme (interpolated onto this one), or an array of interval velocities.
+        :class:`og.Guess` (interval velocities, N x dim y), a Solution of the same problem on
+        any grid or scheme (interpolated onto this one), or an array of interval velocities.
         ``warm``: a Solution of this compiled problem (same N and structure) to start from,
         primal and dual (IPOPT's warm start), for re-solves with new parameters or boundary
         values; one start, no continuation.
