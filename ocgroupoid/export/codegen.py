@@ -23,9 +23,10 @@ export and one solve at a time: the memory CasADi's generated solver checks out,
 hooks' pointer to the running solve's record (``hooks.c.in`` says why).
 
 One export serves every instance of the model: boundary values, physical parameters and T
-are inputs. Multi-start, continuation and the model's own guess hooks stay in Python: the
-C solver starts from the geodesic guess, from a point the caller gives, or from an earlier
-result's primal-dual point (``{prefix}solve_warm``).
+are inputs. Multi-start, continuation, the rescue of a failed order4 solve through order2
+and the model's own guess hooks stay in Python: the C solver starts from the geodesic
+guess, from a point the caller gives, or from an earlier result's primal-dual point
+(``{prefix}solve_warm``).
 """
 
 from __future__ import annotations
