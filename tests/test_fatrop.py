@@ -256,3 +256,7 @@ def test_the_first_start_fatrop_fails_on_is_rescued_through_order2() -> None:
     assert best.success and best.backend == "fatrop"
     assert sol.cost == pytest.approx(best.cost, rel=1e-8)
     assert sol.solve_seconds == sol.ipopt_seconds_total  # one start, every run counted
+    rescue = sol.diagnostics["rescue"]
+    assert rescue["rescued"] and rescue["scheme"] == "order2" and rescue["failed"] == "fatrop"
+    assert rescue["message"].startswith("fatrop failed from the start 'great circle, long way'")
+    assert "rescue" not in best.diagnostics

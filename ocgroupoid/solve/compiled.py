@@ -238,14 +238,21 @@ class CompiledProblem:
                 level, report = self._starts(tr, starts, p, progress, interrupt, deadline,
                                              through)
                 best = min(level, key=lambda r: (not r.success, r.cost))
-                if rescues and tr.fatrop is None and _rescuable(level) and \
+                if rescues and cheaper and tr.fatrop is None and _rescuable(level) and \
                         not interrupt.requested and time.monotonic() < deadline:
-                    via = self._at(n, tr.scheme.rescue)
+                    via = self._at(n, cheaper)
                     pv = via.pack(params, initial, final, T)
                     rescued, rescue = self._rescue(
                         tr, p, via, pv, self._starts_of(via, pv, source, given, False)[0],
                         level[0], progress, interrupt, deadline)
                     best = rescued or best
+                elif through is not None and best.backend == through_label(cheaper):
+                    rescue = {"message": f"fatrop failed from the start '{best.label}'; "
+                              f"solved {cheaper} on the same grid first (fatrop, at most "
+                              f"{RESCUE_ITERATIONS} iterations), then {tr.disc.scheme} from "
+                              "its solution, before IPOPT's fallback", "scheme": cheaper,
+                              "failed": "fatrop", "rescued": True,
+                              "seconds": best.solve_seconds}
                 if i == 0:
                     results, multi = level, report
                 if scheme is None and same is not None and not interrupt.requested and \
@@ -358,6 +365,7 @@ class CompiledProblem:
         :data:`RESCUE_ITERATIONS`: where it fails too the start is hopeless more often than
         not, and IPOPT's fallback follows anyway."""
         fatrop = tr.backends[0]
+        assert fatrop.name == "fatrop"  # (through_label)
 
         def rescue(start: Start) -> tuple[Run, str]:
             via = self._at(tr.N, name, RESCUE_ITERATIONS)
@@ -369,7 +377,7 @@ class CompiledProblem:
             x0, _ = tr.start_point(interpolate(via, cheap.x, pv, tr.N), start.p)
             run = fatrop.run(replace(start, x0=x0, lam_g0=None, lam_x0=None))
             run = replace(run, seconds=run.seconds + cheap.seconds)
-            return run, f"{fatrop.name} through {name}" if run.success else f"{name} rescue"
+            return run, through_label(name) if run.success else f"{name} rescue"
 
         return rescue
 
@@ -500,6 +508,11 @@ class CompiledProblem:
 MESH_ROUNDS = 1
 #: landing misses (fractions of the distance covered) below this are exact for the comparison
 LANDING_FLOOR = 1e-10
+
+
+def through_label(scheme: str | None) -> str:
+    """The backend of a run fatrop's rescue (:meth:`CompiledProblem._through`) produced."""
+    return f"fatrop through {scheme}"
 
 
 def _rescuable(level: list[RawResult]) -> bool:
