@@ -225,7 +225,8 @@ def test_the_rescue_runs_between_fatrops_failure_and_ipopt(
     ipopt = Scripted("ipopt", "Solve_Succeeded", True)
     calls = []
 
-    def rescue(start: Start) -> tuple[Run, str]:
+    def rescue(start: Start, failed: Run) -> tuple[Run, str]:
+        assert failed.status == first_status
         calls.append(start)
         run = Run(start.x0, 2.0, np.zeros(1), np.zeros(1),
                   "Solve_Succeeded" if rescued else "Fatrop_Failed", rescued, 4, 0.25)
@@ -260,3 +261,20 @@ def test_the_first_start_fatrop_fails_on_is_rescued_through_order2() -> None:
     assert rescue["rescued"] and rescue["scheme"] == "order2" and rescue["failed"] == "fatrop"
     assert rescue["message"].startswith("fatrop failed from the start 'great circle, long way'")
     assert "rescue" not in best.diagnostics
+
+
+def test_fatrop_out_of_iterations_is_left_to_ipopt() -> None:
+    """A fatrop run that reached its iteration limit crawled near a solution: the rescue
+    is not tried (it would crawl again), IPOPT's fallback finishes; a breakdown is tried."""
+    solver = og.compile_problem(heavy_top(), N=8, scheme="order4", backend="fatrop")
+    tr = solver.transcription
+    p = tr.pack()
+    start = Start(tr.point(solver.guesses(tr, p, False)[0], p), p)
+    rescue = solver._through(tr, "order2", (None, None, None, None))
+
+    def failed(status: str) -> Run:
+        return Run(start.x0, 1.0, np.zeros(tr.ng), np.zeros(tr.nx), status, False, 500, 1.0)
+
+    assert rescue(start, failed("Maximum_Iterations_Exceeded")) is None
+    run, label = rescue(start, failed("Fatrop_Failed"))
+    assert run.success and label == "fatrop through order2" and run.x.size == tr.nx

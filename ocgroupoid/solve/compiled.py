@@ -45,10 +45,13 @@ Progress = Callable[[str], None]
 #: needs far more is on its way to a worse minimum or nowhere (it is stopped, not counted)
 START_BUDGET = (30, 3)
 PROGRESS_EVERY = 0.25  # seconds between two reports of IPOPT's iterations
-#: the iterations the cheap scheme of fatrop's rescue (:meth:`CompiledProblem._through`) has:
-#: the heavy top from the long way round needs 34-35 of order2's at N = 64-128, where the
-#: reaction wheels' long way round, which order2 cannot solve either, took 257 (1.2 s) to fail
+#: the iterations each run of fatrop's rescue (:meth:`CompiledProblem._through`) has: the
+#: heavy top from the long way round needs 34-35 of order2's and 4-5 of order4's after them at
+#: N = 64-128, where the reaction wheels' long way round, which order2 cannot solve either,
+#: took 257 (1.2 s) to fail
 RESCUE_ITERATIONS = 100
+#: the status of a run that reached its iteration limit
+MAX_ITER = "Maximum_Iterations_Exceeded"
 
 
 def _noop(_: str) -> None:
@@ -361,13 +364,17 @@ class CompiledProblem:
         """The rescue of a start fatrop failed on (:func:`~ocgroupoid.nlp.backends.in_turn`,
         before IPOPT's fallback): fatrop on the scheme ``name`` (order2) on the same grid from
         the start's velocities (built on first use, also in a worker), then fatrop again from
-        its solution; the run in ``tr``'s variables. The cheap scheme gets fatrop alone, and
-        :data:`RESCUE_ITERATIONS`: where it fails too the start is hopeless more often than
-        not, and IPOPT's fallback follows anyway."""
-        fatrop = tr.backends[0]
-        assert fatrop.name == "fatrop"  # (through_label)
+        its solution; the run in ``tr``'s variables. Both runs are fatrop's alone, with
+        :data:`RESCUE_ITERATIONS`: where they fail the start is hopeless more often than not,
+        and IPOPT's fallback follows anyway. Not after fatrop ran out of iterations: that is a
+        crawl near a solution (quadrotor_min_time, N = 256: 500 iterations, the cost 1e-5
+        above the optimum), which the rescue's order4 run repeats (the solve took 37 s with
+        the rescue, 27-32 s without), and IPOPT's fallback finishes."""
+        assert tr.backends[0].name == "fatrop"  # (through_label)
 
-        def rescue(start: Start) -> tuple[Run, str]:
+        def rescue(start: Start, failed: Run) -> tuple[Run, str] | None:
+            if failed.status == MAX_ITER:  # a crawl, not a breakdown: IPOPT's to finish
+                return None
             via = self._at(tr.N, name, RESCUE_ITERATIONS)
             x0, pv = via.start_point(interpolate(tr, start.x0, start.p, tr.N), via.pack(*pack))
             cheap = via.backends[0].run(replace(start, x0=x0, p=pv, lam_g0=None, lam_x0=None))
@@ -375,7 +382,8 @@ class CompiledProblem:
                 return replace(cheap, x=start.x0, f=float("nan"), lam_g=np.zeros(tr.ng),
                                lam_x=np.zeros(tr.nx)), f"{name} rescue"
             x0, _ = tr.start_point(interpolate(via, cheap.x, pv, tr.N), start.p)
-            run = fatrop.run(replace(start, x0=x0, lam_g0=None, lam_x0=None))
+            again = self._at(tr.N, None, RESCUE_ITERATIONS).backends[0]  # tr's NLP
+            run = again.run(replace(start, x0=x0, lam_g0=None, lam_x0=None))
             run = replace(run, seconds=run.seconds + cheap.seconds)
             return run, through_label(name) if run.success else f"{name} rescue"
 

@@ -19,9 +19,10 @@ from .base import INTERRUPTED, TIMED_OUT, Backend, Run, Start
 
 #: ``objective(x, p)``: the cost of a point, for a run stopped before it had one
 Objective = Callable[[np.ndarray, np.ndarray], float]
-#: ``rescue(start)``: another way from the same start, tried after the first backend failed
-#: and before the next one; its run and the label of who produced it, or None
-Rescue = Callable[[Start], "tuple[Run, str] | None"]
+#: ``rescue(start, failed)``: another way from the same start, tried after the first
+#: backend's run ``failed`` and before the next backend; its run and the label of who
+#: produced it, or None (not tried)
+Rescue = Callable[[Start, Run], "tuple[Run, str] | None"]
 
 
 def in_turn(backends: Sequence[Backend], start: Start, objective: Objective,
@@ -41,7 +42,7 @@ def in_turn(backends: Sequence[Backend], start: Start, objective: Objective,
         last = i == len(backends) - 1
         stopped = run.status in (TIMED_OUT, INTERRUPTED)
         if not (last or run.success or stopped) and i == 0 and rescue is not None:
-            rescued = rescue(start)
+            rescued = rescue(start, run)
             if rescued is not None:
                 run, label = rescued
                 spent += run.seconds
