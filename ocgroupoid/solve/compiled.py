@@ -233,15 +233,15 @@ class CompiledProblem:
                 tr = self._at(n, scheme)
                 p = tr.pack(params, initial, final, T)
                 starts = self._starts_of(tr, p, source, given, multistart)
-                cheaper = tr.scheme.rescue
-                rescues = i == len(plan) - 1 and not schemes and cheaper is not None and \
-                    not _whole_point(given)
+                # the cheaper scheme a failure of the final grid is rescued through, if any
+                cheaper = tr.scheme.rescue if i == len(plan) - 1 and not schemes and \
+                    not _whole_point(given) else None
                 through = self._through(tr, cheaper, (params, initial, final, T)) \
-                    if rescues and cheaper and tr.fatrop is not None else None
+                    if cheaper and tr.fatrop is not None else None
                 level, report = self._starts(tr, starts, p, progress, interrupt, deadline,
                                              through)
                 best = min(level, key=lambda r: (not r.success, r.cost))
-                if rescues and cheaper and tr.fatrop is None and _rescuable(level) and \
+                if cheaper and tr.fatrop is None and _rescuable(level) and \
                         not interrupt.requested and time.monotonic() < deadline:
                     via = self._at(n, cheaper)
                     pv = via.pack(params, initial, final, T)

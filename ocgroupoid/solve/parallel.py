@@ -187,7 +187,7 @@ def _serve(conn: Connection, tr: Transcription, shared: _Shared,
 
 def _failed(tr: Transcription, guess: Guess, p: np.ndarray, why: str) -> RawResult:
     """The result of a start that failed in its worker: its start point, no cost."""
-    x0 = guess.x if guess.x is not None and guess.x.size == tr.nx else tr.point(guess, p)
+    x0, _ = tr.start_point(guess, p)
     return RawResult(guess.label, np.asarray(x0, dtype=float), p, np.zeros(tr.ng),
                      float("inf"), WORKER_FAILED, False, 0, 0.0, np.zeros(tr.nx))
 
