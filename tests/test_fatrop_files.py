@@ -38,3 +38,23 @@ def test_fatrop_converges_without_fallback(path: Path, N: int) -> None:
     ipopt = tr.backends[-1].run(Start(tr.point(guess, p), p))
     assert ipopt.success, ipopt.status
     assert abs(run.cost - ipopt.f) <= TOL * abs(ipopt.f), (run.cost, ipopt.f)
+
+
+def test_fatrop_takes_about_ipopts_iterations_on_saturated_controls_of_their_own() -> None:
+    """The quadrotor's torques sit at their bounds on most of a minimum-time flight. order4
+    holds a bound on controls of their own at an interval's ends on one variable each (its
+    control variables are the end values): fatrop then converges in about IPOPT's iterations
+    (measured at N = 32: 27 and 28). With the Gauss values as the variables and the ends
+    bounded on the motion's estimate it regularised near the solution and took 53 (IPOPT 31)."""
+    path = ROOT / "problems" / "quadrotor_min_time.yaml"
+    cfg = files.load(path, ["horizon.N=32"])
+    f, d = cfg.file, cfg.file.discretization
+    tr = compile_problem(files.build(cfg), 32, d.retraction, d.rule, f.solver.ipopt, d.scheme,
+                         d.steps, False, "fatrop").transcription
+    p = tr.pack()
+    start = Start(tr.point(tr.guesses(p)[0], p), p)
+    fatrop, ipopt = (backend.run(start) for backend in tr.backends)
+    assert fatrop.success and ipopt.success, (fatrop.status, ipopt.status)
+    assert abs(fatrop.f - ipopt.f) <= TOL * abs(ipopt.f)
+    assert fatrop.iterations <= 1.2 * ipopt.iterations + 2, (fatrop.iterations,
+                                                               ipopt.iterations)

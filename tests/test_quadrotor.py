@@ -140,6 +140,38 @@ def test_the_minimum_time_cost_agrees_with_the_independent_solver() -> None:
     assert abs(ours - theirs["cost"]) <= 2 * spread + 1e-6, (ours, theirs["cost"], spread)
 
 
+def test_controls_of_their_own_are_linear_and_bounded_on_the_whole_interval() -> None:
+    """order4's controls of their own are linear on each interval, their variables its end
+    values: the control a solution reports is one line per interval, within its bounds at
+    every instant (not only at the bound points), and the bound at either end of an interval
+    is a row on one variable, the form fatrop's Riccati recursion takes without regularising
+    (on the motion's estimate there it crawled: tests/test_fatrop.py)."""
+    from ocgroupoid import files
+    cfg = files.load(ROOT / "problems" / "quadrotor_min_time.yaml",
+                     ["horizon.N=16", "solver.multistart=false"])
+    solver = og.compile_problem(files.build(cfg), N=16, scheme="order4")
+    sol = solver.solve(multistart=False)
+    assert sol.success, sol.hint
+    u = PPoly(np.asarray(sol.control_ppoly["c"]), np.asarray(sol.control_ppoly["x"]))
+    a, b = u.x[:-1], u.x[1:]  # every interval: the control at 1/4, 1/2, 3/4 on its chord
+    for w in (0.25, 0.5, 0.75):
+        chord = (1 - w) * u(a + 1e-12) + w * u(b - 1e-12)
+        assert np.abs(u((1 - w) * a + w * b) - chord).max() <= 1e-9
+    t = np.linspace(0.0, sol.T, 20001)
+    f, tau = u(t)[:, 0], u(t)[:, 1:]
+    assert f.min() >= -1e-9 and f.max() <= 20.0 + 1e-9
+    assert np.abs(tau).max() <= 0.5 + 1e-9
+    assert np.isclose(np.abs(tau), 0.5, atol=1e-6).mean() > 0.5  # bang-bang torques: the
+    # bounds are met (on 63-88 % of the flight per torque), not idle
+    tr = solver.transcription
+    block = next(b for b in tr.blocks if b.name == "interval_bounds")
+    z = ca.SX.sym("z", block.fun.size1_in(0))
+    J = ca.jacobian(block.fun(z)[1], z[:block.n_var])
+    ends = [i for i, name in enumerate(block.rows) if name.endswith(("(start)", "(end)"))]
+    assert len(ends) == 2 * 4  # f and three torques at both ends
+    assert all(J[i, :].nnz() == 1 for i in ends)
+
+
 def test_the_replay_drives_the_true_vehicle() -> None:
     """The replay integrates thrust along body z and gravity: an independent integration of
     quaternion Newton-Euler with the solution's own control polynomial lands where it says."""

@@ -39,7 +39,7 @@ class Stages:
         self.n_u = problem.U.numel()
         #: ``estimate(s, y, dy, P, u0) -> u``: the controls declared as variables that best
         #: explain the motion (least squares on the actuated equations, from u0), where a
-        #: scheme carries none (guesses, the ends of order4's intervals); None without them
+        #: scheme carries none (the guesses' controls); None without them
         self.estimate: ca.Function | None = None
         if self.n_u:
             mech = problem.dynamics

@@ -56,7 +56,3 @@ def bound_times(extra: int) -> np.ndarray:
     inside = np.arange(1, extra + 1) / (extra + 1)
     return np.unique(np.concatenate([BOUND_POINTS, inside]))
 
-
-def lagrange(nodes: np.ndarray, tau: float) -> np.ndarray:
-    """The weights of the polynomial through values at ``nodes`` evaluated at ``tau``."""
-    return np.array([np.prod([(tau - b) / (a - b) for b in nodes if b != a]) for a in nodes])

@@ -25,12 +25,25 @@ same count per interval but one more unknown (the initial rate) and a second roo
 optimiser used to satisfy the heavy top's equations only at the Gauss points (cost near 0,
 replay 0.4 rad off; measured, see tests/test_order4.py).
 
+Controls of their own (``pb.control``) are linear on each interval, jumping at nodes; their
+variables are the values at the interval's two ends, the cost and ``Phi`` read them at the
+Gauss points and the bounds at every bound point, so that a bound on the controls alone, held
+at the ends, holds on the whole interval and the control the read-out reports is the one
+bounded. Why the ends and not the Gauss values (the same line in other coordinates): a bound
+at an end is then a row on one variable, which fatrop's Riccati recursion takes as it comes.
+With the Gauss values as the variables and the ends bounded on the motion's estimate there,
+fatrop regularised its KKT system near the solution and converged linearly:
+quadrotor_min_time took 38, 53, 65, 75 iterations at N = 16, 32, 64, 128 (IPOPT 26, 31, 37,
+43); with only the ends bounded on the line, 135 at N = 64 in those coordinates and 30 in
+these. Now 25, 27, 35, 35 (IPOPT 23, 28, 32, 37), the cost 4e-6 to 7e-4 lower on every grid
+(docs/benchmarks/performance.md, "fatrop by itself").
+
 First-order problems: :class:`~ocgroupoid.nlp.schemes.gauss_stages.GaussStages`.
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, cast
+from typing import TYPE_CHECKING, Any
 
 import casadi as ca
 import numpy as np
@@ -47,7 +60,6 @@ from .gauss import (
     SAMPLES,
     bound_times,
     cubic_coefficients,
-    lagrange,
     quadratic,
 )
 
@@ -124,7 +136,7 @@ class QuadraticGauss(Scheme):
         ds, dg, nu = G.state_size, G.algebra_dim, self.stages.n_u
         s = ca.SX.sym("s", ds)
         y0, y1, b = (ca.SX.sym(n, dg) for n in ("y0", "y1", "b"))
-        ug = ca.SX.sym("u", 2 * nu)  # controls of their own at the two Gauss points
+        ue = ca.SX.sym("u", 2 * nu)  # controls of their own at the interval's two ends
         T = ca.SX.sym("T")
         h = T / N
 
@@ -142,29 +154,17 @@ class QuadraticGauss(Scheme):
             return self.stages.at([expr], G.step(s, self.retractions, theta(tau)), y, dy,
                                   u)[0]
 
-        # the controls at the bound points: their variables at the Gauss points, and at the
-        # ends the controls that best explain the motion there (from the line through the
-        # Gauss values): exact wherever Phi holds, like the recovered controls
+        # controls of their own: linear on the interval, their variables its end values
+        # (module docstring); every point reads the line
         u_at: dict[float, ca.SX | None] = {float(c): None for c in self.bound_times}
         if nu:
-            assert self.stages.estimate is not None
-            u1, u2 = ug[:nu], ug[nu:]
-            u_at[float(GAUSS2[0])], u_at[float(GAUSS2[1])] = u1, u2
-            for c in (0.0, 1.0):
-                line = u1 + (u2 - u1) * (c - GAUSS2[0]) / (GAUSS2[1] - GAUSS2[0])
-                y, dy = quadratic(y0, y1, b, h, c)
-                u_at[c] = self.stages.estimate(G.step(s, self.retractions, theta(c)), y, dy,
-                                               pb.P, line)
-            samples = [cast(ca.SX, u_at[float(c)]) for c in SAMPLES]  # all four set above
-            for c in self.bound_times:  # inside: the cubic the read-out reports
-                if u_at[float(c)] is None:
-                    w = lagrange(SAMPLES, float(c))
-                    u_at[float(c)] = cast(ca.SX, sum(float(w[i]) * samples[i] for i in range(4)))
+            for c in u_at:
+                u_at[c] = (1.0 - c) * ue[:nu] + c * ue[nu:]
 
-        args = [s, y0, y1, b, ug, T, pb.P]
-        names = ["s", "y0", "y1", "b", "u_gauss", "T", "P"]
+        args = [s, y0, y1, b, ue, T, pb.P]
+        names = ["s", "y0", "y1", "b", "u_ends", "T", "P"]
         cost = self.stages.running_cost()
-        if nu:  # the controls live at the Gauss points: 2-point Gauss (order 4)
+        if nu:  # the controls are linear on an interval: 2-point Gauss (order 4)
             L = h / 2 * sum(at(cost, float(c), u_at[float(c)]) for c in GAUSS2)
         else:
             L = h * sum(float(w) * at(cost, float(c)) for c, w in zip(GAUSS3, GAUSS3_W))
@@ -175,7 +175,7 @@ class QuadraticGauss(Scheme):
             if ineq.numel() else ca.SX(0, 1)
         #: ``interval(s_k, y_k, y_{k+1}, b_k, u_k, T, P) -> (L_d, Phi_d, H)``: Phi_d stacks
         #: the two Gauss points, the bounds' expressions H the :data:`BOUND_POINTS`; u_k: the
-        #: controls of their own at the Gauss points (empty when they are recovered)
+        #: controls of their own at the interval's ends (empty when they are recovered)
         self.interval = ca.Function("interval", args, [L, Phi, H], names, ["L", "Phi", "H"])
         #: ``increment(y_k, y_{k+1}, b_k, T) -> W_k``, exponential coordinates of the step
         self.increment = ca.Function("increment", [y0, y1, b, T], [step],
@@ -187,12 +187,15 @@ class QuadraticGauss(Scheme):
             [ca.vertcat(*[at(u, float(c), u_at[float(c)]) for c in SAMPLES])], names, ["u"])
         if nu:
             assert self.stages.estimate is not None
-            #: ``gauss_controls(s_k, y_k, y_{k+1}, b_k, T, P) -> u_k`` that best explain the
-            #: motion at the Gauss points (the guesses' controls)
-            self.gauss_controls = ca.Function("gauss_controls", args[:4] + args[5:], [
-                ca.vertcat(*[self.stages.estimate(G.step(s, self.retractions, theta(float(c))),
-                                                  *quadratic(y0, y1, b, h, float(c)), pb.P,
-                                                  ca.DM.zeros(nu)) for c in GAUSS2])])
+            u1, u2 = (self.stages.estimate(G.step(s, self.retractions, theta(float(c))),
+                                           *quadratic(y0, y1, b, h, float(c)), pb.P,
+                                           ca.DM.zeros(nu)) for c in GAUSS2)
+            #: ``end_controls(s_k, y_k, y_{k+1}, b_k, T, P) -> u_k``: the line through the
+            #: controls that best explain the motion at the Gauss points, at the interval's
+            #: ends (the guesses' controls)
+            self.end_controls = ca.Function("end_controls", args[:4] + args[5:], [ca.vertcat(
+                *[u1 + (u2 - u1) * (c - GAUSS2[0]) / (GAUSS2[1] - GAUSS2[0])
+                  for c in (0.0, 1.0)])])
 
     @property
     def n_stage(self) -> int:
@@ -201,7 +204,7 @@ class QuadraticGauss(Scheme):
 
     def index(self, layout: Layout) -> None:
         """x per interval k: ``b_k``, ``y_{k+1}`` (not the last: y_N is V_N), ``s_{k+1}``;
-        then the controls of their own at the Gauss points, when declared."""
+        then the controls of their own at the interval's ends, when declared."""
         G, N = self.problem.groupoid, self.N
         dg, ds = G.algebra_dim, G.state_size
         self.layout = layout
@@ -218,7 +221,7 @@ class QuadraticGauss(Scheme):
                 c += dg
             self.states[:, k + 1] = layout.stage[c:c + ds]
             c += ds
-        self.UG = layout.stage[c:].reshape(N, 2 * self.stages.n_u).T
+        self.UE = layout.stage[c:].reshape(N, 2 * self.stages.n_u).T
         self.end_velocity = layout.VN
 
     def blocks(self) -> list[Block]:
@@ -236,7 +239,7 @@ class QuadraticGauss(Scheme):
                         columns=[f"interval {k}" for k in range(N)],
                         next=slice(ds + 3 * dg, 2 * ds + 3 * dg))]
         return blocks + gauss_blocks(self, [ds, dg, dg, dg, 2 * self.stages.n_u, 1, npar],
-                                     columns(*cols, self.UG, steps, lay.P, ncols=N),
+                                     columns(*cols, self.UE, steps, lay.P, ncols=N),
                                      "Gauss point")
 
     def _increments(self, Y: ca.MX, B: ca.MX, T: ca.MX) -> ca.MX:
@@ -263,13 +266,14 @@ class QuadraticGauss(Scheme):
         parts = [(self.Y, Y), (self.B, B), (self.states[:, 1:], S)]
         if self.stages.n_u:
             S0 = ca.horzcat(pick(lay.s0), S[:, :-1])
-            parts.append((self.UG, self.gauss_controls.map(N)(S0, Y[:, :-1], Y[:, 1:], B, H,
+            parts.append((self.UE, self.end_controls.map(N)(S0, Y[:, :-1], Y[:, 1:], B, H,
                                                               pick(lay.P))))
         return parts
 
     def readout(self, pick: Pick) -> Readout:
         """Node velocities; controls sampled at :data:`SAMPLES` of each interval and the
-        cubics through them (one per interval: the controls jump with the rates at nodes)."""
+        cubics through them (one per interval: the controls jump with the rates at nodes; for
+        controls of their own, lines)."""
         lay, N = self.layout, self.N
         assert lay is not None
         T, P = local_horizons(self, pick), pick(lay.P)
@@ -277,7 +281,7 @@ class QuadraticGauss(Scheme):
         steps = self._increments(Y, B, T)
         S = ca.horzcat(pick(lay.s0), self.stages.step.mapaccum(N)(pick(lay.s0), steps))
         samples = self.control_samples.map(N)(S[:, :-1], Y[:, :-1], Y[:, 1:], B,
-                                              pick(self.UG), T, P)
+                                              pick(self.UE), T, P)
         m = self.stages.controls.numel()
         t_u = np.concatenate([(np.arange(N)[:, None] + SAMPLES[None, :3]).ravel() / N, [1.0]])
         u = ca.horzcat(ca.reshape(samples[:3 * m, :], m, 3 * N), samples[3 * m:, -1]) if m \
@@ -295,5 +299,5 @@ class QuadraticGauss(Scheme):
     def unpack(self, w: np.ndarray) -> dict[str, np.ndarray]:
         lay = self.layout
         assert lay is not None
-        return {"y": w[self.Y].T, "b": w[self.B].T, "s": w[self.states].T, "u": w[self.UG].T,
+        return {"y": w[self.Y].T, "b": w[self.B].T, "s": w[self.states].T, "u": w[self.UE].T,
                 "T": w[lay.T][0], "P": w[lay.P]}
