@@ -17,6 +17,7 @@ from ocgroupoid.nlp.backends import Backend, Run, Start, in_turn
 from ocgroupoid.nlp.schemes.base import stage_function
 from ocgroupoid.nlp.stageform import NotStaged, StageForm, stage_form
 from ocgroupoid.solve import compile_problem
+from ocgroupoid.solve.compiled import RESCUE_ITERATIONS
 from ocgroupoid.systems.heavy_top import heavy_top
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -210,17 +211,21 @@ class Scripted(Backend):
         raise NotImplementedError
 
 
-@pytest.mark.parametrize("first_status, rescued, expected, runs", [
-    ("Fatrop_Failed", True, "fatrop through order2", (1, 1, 0)),
-    ("Fatrop_Failed", False, "ipopt after order2 rescue after fatrop", (1, 1, 1)),
-    ("Solve_Succeeded", True, "fatrop", (1, 0, 0)),
-    ("Maximum_WallTime_Exceeded", True, "fatrop", (1, 0, 0)),
+@pytest.mark.parametrize("first_status, rescued, expected, runs, earlier", [
+    ("Fatrop_Failed", True, "fatrop through order2", (1, 1, 0),
+     [("fatrop", "Fatrop_Failed", 3), ("order2", "Solve_Succeeded", 7)]),
+    ("Fatrop_Failed", False, "ipopt after order2 rescue after fatrop", (1, 1, 1),
+     [("fatrop", "Fatrop_Failed", 3), ("order2", "Solve_Succeeded", 7),
+      ("order2 rescue", "Fatrop_Failed", 4)]),
+    ("Solve_Succeeded", True, "fatrop", (1, 0, 0), []),
+    ("Maximum_WallTime_Exceeded", True, "fatrop", (1, 0, 0), []),
 ])
 def test_the_rescue_runs_between_fatrops_failure_and_ipopt(
-        first_status: str, rescued: bool, expected: str, runs: tuple) -> None:
+        first_status: str, rescued: bool, expected: str, runs: tuple, earlier: list) -> None:
     """``in_turn``'s rescue: after the first backend failed of itself, before the next; its
     run is the answer when it succeeded; not after a success or a run out of time. The
-    seconds count every run."""
+    seconds count every run, and the answer names the runs before it (the rescue's own
+    included) with their status and iterations."""
     fatrop = Scripted("fatrop", first_status, first_status == "Solve_Succeeded")
     ipopt = Scripted("ipopt", "Solve_Succeeded", True)
     calls = []
@@ -229,7 +234,8 @@ def test_the_rescue_runs_between_fatrops_failure_and_ipopt(
         assert failed.status == first_status
         calls.append(start)
         run = Run(start.x0, 2.0, np.zeros(1), np.zeros(1),
-                  "Solve_Succeeded" if rescued else "Fatrop_Failed", rescued, 4, 0.25)
+                  "Solve_Succeeded" if rescued else "Fatrop_Failed", rescued, 4, 0.25,
+                  earlier=(("order2", "Solve_Succeeded", 7),))
         return run, "fatrop through order2" if rescued else "order2 rescue"
 
     run, label = in_turn([fatrop, ipopt], Start(np.zeros(1), np.zeros(0)), lambda x, p: 0.0,
@@ -237,6 +243,7 @@ def test_the_rescue_runs_between_fatrops_failure_and_ipopt(
     assert label == expected
     assert (fatrop.runs, len(calls), ipopt.runs) == runs
     assert run.seconds == pytest.approx(0.5 * (fatrop.runs + ipopt.runs) + 0.25 * len(calls))
+    assert list(run.earlier) == earlier
 
 
 def test_the_first_start_fatrop_fails_on_is_rescued_through_order2() -> None:
@@ -258,8 +265,13 @@ def test_the_first_start_fatrop_fails_on_is_rescued_through_order2() -> None:
     assert sol.cost == pytest.approx(best.cost, rel=1e-8)
     assert sol.solve_seconds == sol.ipopt_seconds_total  # one start, every run counted
     rescue = sol.diagnostics["rescue"]
-    assert rescue["rescued"] and rescue["scheme"] == "order2" and rescue["failed"] == "fatrop"
-    assert rescue["message"].startswith("fatrop failed from the start 'great circle, long way'")
+    assert rescue["rescued"] and rescue["scheme"] == "order2" and rescue["backend"] == "fatrop"
+    assert rescue["failed"] == "Fatrop_Failed"
+    tried, cheap, last = rescue["iterations"]  # fatrop's failure, order2, order4
+    assert tried == 12 and 0 < cheap <= RESCUE_ITERATIONS and last == sol.iterations
+    assert rescue["message"].startswith("fatrop failed from the start 'great circle, long way' "
+                                        "(Fatrop_Failed after 12 iterations); solved order2 "
+                                        f"on the same grid first in {cheap} iterations")
     assert "rescue" not in best.diagnostics
 
 

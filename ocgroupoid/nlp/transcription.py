@@ -20,7 +20,7 @@ import numpy as np
 from ..model.problem import Problem
 from . import backends
 from .backends import FatropBackend, IpoptBackend, Start, in_turn, ipopt_options
-from .backends.base import never
+from .backends.base import Attempt, never
 from .backends.policy import Rescue
 from .method import Method
 from .options import SolverOptions
@@ -45,6 +45,8 @@ class RawResult:
     #: which solver produced it: ``ipopt``, ``fatrop``, or ``ipopt after fatrop`` (fatrop
     #: failed and IPOPT solved from the same start; solve_seconds counts both)
     backend: str = "ipopt"
+    #: the runs before it from the same start: (who, status, iterations), in order
+    earlier: tuple[Attempt, ...] = ()
 
 
 class Transcription(NonlinearProgram):
@@ -99,7 +101,7 @@ class Transcription(NonlinearProgram):
         run, label = in_turn(self.backends, start, lambda x, p: float(self.f_fun(x, p)),
                              rescue)
         return RawResult(guess.label, run.x, p, run.lam_g, run.f, run.status, run.success,
-                         run.iterations, run.seconds, run.lam_x, label)
+                         run.iterations, run.seconds, run.lam_x, label, run.earlier)
 
     def start_point(self, guess: Guess, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The NLP point a solve starts from, and its parameters: a free horizon's guess is

@@ -249,13 +249,8 @@ class CompiledProblem:
                         tr, p, via, pv, self._starts_of(via, pv, source, given, False)[0],
                         level[0], progress, interrupt, deadline)
                     best = rescued or best
-                elif through is not None and best.backend == through_label(cheaper):
-                    rescue = {"message": f"fatrop failed from the start '{best.label}'; "
-                              f"solved {cheaper} on the same grid first (fatrop, at most "
-                              f"{RESCUE_ITERATIONS} iterations), then {tr.disc.scheme} from "
-                              "its solution, before IPOPT's fallback", "scheme": cheaper,
-                              "failed": "fatrop", "rescued": True,
-                              "seconds": best.solve_seconds}
+                elif cheaper and through is not None and best.backend == through_label(cheaper):
+                    rescue = _through_report(best, tr.disc.scheme, cheaper)
                 if i == 0:
                     results, multi = level, report
                 if scheme is None and same is not None and not interrupt.requested and \
@@ -384,7 +379,8 @@ class CompiledProblem:
             x0, _ = tr.start_point(interpolate(via, cheap.x, pv, tr.N), start.p)
             again = self._at(tr.N, None, RESCUE_ITERATIONS).backends[0]  # tr's NLP
             run = again.run(replace(start, x0=x0, lam_g0=None, lam_x0=None))
-            run = replace(run, seconds=run.seconds + cheap.seconds)
+            run = replace(run, seconds=run.seconds + cheap.seconds,
+                          earlier=((name, cheap.status, cheap.iterations),))
             return run, through_label(name) if run.success else f"{name} rescue"
 
         return rescue
@@ -521,6 +517,18 @@ LANDING_FLOOR = 1e-10
 def through_label(scheme: str | None) -> str:
     """The backend of a run fatrop's rescue (:meth:`CompiledProblem._through`) produced."""
     return f"fatrop through {scheme}"
+
+
+def _through_report(best: RawResult, name: str, cheaper: str) -> dict[str, Any]:
+    """``diagnostics["rescue"]`` of a start fatrop's rescue solved (:meth:`_through`): fatrop's
+    failed run and the rescue's two (``best.earlier`` and ``best``)."""
+    (_, status, tried), (_, _, cheap) = best.earlier[:2]
+    return {"message": f"fatrop failed from the start '{best.label}' ({status} after {tried} "
+            f"iterations); solved {cheaper} on the same grid first in {cheap} iterations "
+            f"(fatrop, at most {RESCUE_ITERATIONS}), then {name} from its solution in "
+            f"{best.iterations}, before IPOPT's fallback", "scheme": cheaper, "failed": status,
+            "backend": "fatrop", "rescued": True, "iterations": [tried, cheap, best.iterations],
+            "seconds": best.solve_seconds}
 
 
 def _rescuable(level: list[RawResult]) -> bool:

@@ -69,10 +69,15 @@ class Start:
         return self.lam_g0 is not None and self.lam_x0 is not None
 
 
+#: a run that came before another from the same start: who ran (a backend, or a rescue's
+#: scheme), its status and its iterations
+Attempt = tuple[str, str, int]
+
+
 @dataclass
 class Run:
     """What one backend returned, in the NLP's own variables and rows (``note``: why it
-    was stopped, if it was)."""
+    was stopped, if it was; ``earlier``: the runs before it from the same start, in order)."""
 
     x: np.ndarray
     f: float
@@ -83,6 +88,7 @@ class Run:
     iterations: int
     seconds: float
     note: str = ""
+    earlier: tuple[Attempt, ...] = ()
 
 
 class Backend(ABC):

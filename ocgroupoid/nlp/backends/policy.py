@@ -15,7 +15,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from .base import INTERRUPTED, TIMED_OUT, Backend, Run, Start
+from .base import INTERRUPTED, TIMED_OUT, Attempt, Backend, Run, Start
 
 #: ``objective(x, p)``: the cost of a point, for a run stopped before it had one
 Objective = Callable[[np.ndarray, np.ndarray], float]
@@ -29,11 +29,13 @@ def in_turn(backends: Sequence[Backend], start: Start, objective: Objective,
             rescue: Rescue | None = None) -> tuple[Run, str]:
     """The run of the first backend that succeeds or is stopped by the time or an
     interrupt, else of the last; with the label of who produced it (``fatrop``,
-    ``ipopt``, ``ipopt after fatrop``). Its seconds count every run. ``rescue`` runs after
+    ``ipopt``, ``ipopt after fatrop``). Its seconds count every run, and its ``earlier``
+    names the runs before it with their status and iterations. ``rescue`` runs after
     the first backend failed of itself, before the next: its run (in this NLP's variables)
     is the answer if it succeeded (its label, e.g. ``fatrop through order2``) or was
     stopped; else the next backend runs (``ipopt after order2 rescue after fatrop``)."""
     names: list[str] = []
+    earlier: list[Attempt] = []
     spent = 0.0
     for i, backend in enumerate(backends):
         run = backend.run(start)
@@ -44,14 +46,17 @@ def in_turn(backends: Sequence[Backend], start: Start, objective: Objective,
         if not (last or run.success or stopped) and i == 0 and rescue is not None:
             rescued = rescue(start, run)
             if rescued is not None:
+                earlier.append((names[0], run.status, run.iterations))
                 run, label = rescued
+                earlier += run.earlier  # the rescue's runs before its last
                 spent += run.seconds
                 names.insert(0, label)
                 stopped = run.status in (TIMED_OUT, INTERRUPTED)
                 if run.success:
-                    return replace(run, seconds=spent), label
+                    return replace(run, seconds=spent, earlier=tuple(earlier)), label
         if last or run.success or stopped:
             if not run.success and not last:  # stopped: the cost of the point it reached
                 run = replace(run, f=objective(run.x, start.p))
-            return replace(run, seconds=spent), " after ".join(names)
+            return replace(run, seconds=spent, earlier=tuple(earlier)), " after ".join(names)
+        earlier.append((names[0], run.status, run.iterations))
     raise ValueError("no backend to run")
