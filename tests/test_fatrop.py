@@ -3,6 +3,7 @@ fatrop's order, and fatrop reaches IPOPT's cost on the problem files."""
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import casadi as ca
@@ -244,6 +245,70 @@ def test_the_rescue_runs_between_fatrops_failure_and_ipopt(
     assert (fatrop.runs, len(calls), ipopt.runs) == runs
     assert run.seconds == pytest.approx(0.5 * (fatrop.runs + ipopt.runs) + 0.25 * len(calls))
     assert list(run.earlier) == earlier
+
+
+class Recording(Scripted):
+    """A scripted backend that keeps the starts it was given."""
+
+    def __init__(self, name: str, status: str, success: bool) -> None:
+        super().__init__(name, status, success)
+        self.starts: list[Start] = []
+
+    def run(self, start: Start) -> Run:
+        self.starts.append(start)
+        run = super().run(start)
+        return replace(run, x=start.x0 + 1.0, lam_g=np.full(1, 2.0), lam_x=np.full(1, 3.0))
+
+
+@pytest.mark.parametrize("status, label, warm", [
+    ("Solved_To_Acceptable_Level", "ipopt polish after fatrop", True),
+    ("Fatrop_Failed", "ipopt after fatrop", False),
+])
+def test_a_stop_at_an_acceptable_point_is_polished_from_that_point(
+        status: str, label: str, warm: bool) -> None:
+    """fatrop near a solution but not at the tolerance (its acceptable stop): IPOPT starts
+    from fatrop's point and multipliers (a warm start), not from the start, and no rescue
+    runs; after a failure of another kind IPOPT starts from the start, after the rescue."""
+    fatrop = Recording("fatrop", status, False)
+    ipopt = Recording("ipopt", "Solve_Succeeded", True)
+    rescued: list[Run] = []
+
+    def rescue(start: Start, failed: Run) -> None:
+        rescued.append(failed)  # and gives up: the next backend runs
+
+    run, name = in_turn([fatrop, ipopt], Start(np.zeros(1), np.zeros(0)), lambda x, p: 0.0,
+                        rescue)
+    assert name == label and run.success
+    given = ipopt.starts[0]
+    if warm:
+        assert given.warm and (given.x0[0], given.lam_g0[0], given.lam_x0[0]) == (1, 2, 3)
+    else:
+        assert not given.warm and given.x0[0] == 0.0
+    assert len(rescued) == (0 if warm else 1)
+    assert run.earlier == (("fatrop", status, 3),)
+
+
+def test_fatrop_crawling_near_a_solution_is_polished_by_ipopt() -> None:
+    """quadrotor_min_time from the long way round, N = 8: fatrop reaches the solution's
+    neighbourhood and then regularises in every iteration, its error stuck near 4e-9 (it ran
+    500 iterations, then IPOPT solved the start again in 21). It now stops at an acceptable
+    point and IPOPT finishes from it in a few iterations, at the cost IPOPT reaches from the
+    start."""
+    path = Path(__file__).resolve().parent.parent / "problems" / "quadrotor_min_time.yaml"
+    cfg = files.load(path, ["horizon.N=8"])
+    f, d = cfg.file, cfg.file.discretization
+    solver = compile_problem(files.build(cfg), 8, d.retraction, d.rule, f.solver.ipopt,
+                             d.scheme, d.steps, False, "fatrop")
+    tr = solver.transcription
+    p = tr.pack()
+    far = next(g for g in solver.guesses(tr, p, True) if g.label == "long way round")
+    r = tr.solve(far, p)
+    assert r.success and r.backend == "ipopt polish after fatrop", (r.backend, r.status)
+    (who, status, crawled), = r.earlier
+    assert (who, status) == ("fatrop", "Solved_To_Acceptable_Level") and crawled < 500
+    assert r.iterations <= 5
+    cold = tr.backends[-1].run(Start(tr.point(far, p), p))
+    assert cold.success and r.cost == pytest.approx(cold.f, rel=1e-9)
 
 
 def test_the_first_start_fatrop_fails_on_is_rescued_through_order2() -> None:

@@ -42,8 +42,9 @@ class RawResult:
     iterations: int
     solve_seconds: float
     lam_x: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    #: which solver produced it: ``ipopt``, ``fatrop``, or ``ipopt after fatrop`` (fatrop
-    #: failed and IPOPT solved from the same start; solve_seconds counts both)
+    #: which solver produced it: ``ipopt``, ``fatrop``, ``ipopt after fatrop`` (fatrop
+    #: failed and IPOPT solved from the same start; solve_seconds counts both) or ``ipopt
+    #: polish after fatrop`` (IPOPT from the point where fatrop stopped, near a solution)
     backend: str = "ipopt"
     #: the runs before it from the same start: (who, status, iterations), in order
     earlier: tuple[Attempt, ...] = ()

@@ -362,9 +362,11 @@ class CompiledProblem:
         its solution; the run in ``tr``'s variables. Both runs are fatrop's alone, with
         :data:`RESCUE_ITERATIONS`: where they fail the start is hopeless more often than not,
         and IPOPT's fallback follows anyway. Not after fatrop ran out of iterations: that is a
-        crawl near a solution (quadrotor_min_time, N = 256: 500 iterations, the cost 1e-5
-        above the optimum), which the rescue's order4 run repeats (the solve took 37 s with
-        the rescue, 27-32 s without), and IPOPT's fallback finishes."""
+        crawl near a solution (quadrotor_min_time, N = 256, before fatrop's acceptable stop:
+        500 iterations, the cost 1e-5 above the optimum), which the rescue's order4 run
+        repeats (the solve took 37 s with the rescue, 27-32 s without), and IPOPT's fallback
+        finishes; nor after fatrop's acceptable stop, which IPOPT polishes
+        (:func:`~ocgroupoid.nlp.backends.in_turn`)."""
         assert tr.backends[0].name == "fatrop"  # (through_label)
 
         def rescue(start: Start, failed: Run) -> tuple[Run, str] | None:

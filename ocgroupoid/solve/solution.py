@@ -87,7 +87,8 @@ class Solution:
     #: best start's
     starts: int = 1
     ipopt_seconds_total: float = 0.0
-    #: the solver of the best start (``ipopt``, ``fatrop``, ``ipopt after fatrop``)
+    #: the solver of the best start (``ipopt``, ``fatrop``, ``ipopt after fatrop``, ``ipopt
+    #: polish after fatrop``: IPOPT from fatrop's acceptable point)
     backend: str = "ipopt"
 
     def __repr__(self) -> str:

@@ -29,6 +29,9 @@ from ..watch import Listener
 #: what a solve reports that was stopped at its deadline (IPOPT's name for it) or by Ctrl-C
 TIMED_OUT = "Maximum_WallTime_Exceeded"
 INTERRUPTED = "interrupted"
+#: what a run reports that stopped near a solution, its error below the acceptable level for
+#: many iterations but not below the tolerance (IPOPT's name; not a success)
+ACCEPTABLE = "Solved_To_Acceptable_Level"
 
 
 def never() -> bool:

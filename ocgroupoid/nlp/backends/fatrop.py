@@ -19,6 +19,7 @@ NaN evaluations, or on Ctrl-C.
 from __future__ import annotations
 
 import time
+from functools import cached_property
 from typing import Any
 
 import casadi as ca
@@ -31,7 +32,7 @@ from ..isolated import NAN_LIMIT, Isolated, Stopped
 from ..jit import compiled
 from ..options import SolverOptions
 from ..stageform import NotStaged, StageForm, stage_form
-from .base import INTERRUPTED, TIMED_OUT, Backend, Graph, Run, Start
+from .base import ACCEPTABLE, INTERRUPTED, TIMED_OUT, Backend, Graph, Run, Start
 from .ipopt import ipopt_options
 
 #: IPOPT options fatrop also has; the others do not apply to it
@@ -53,6 +54,17 @@ SHARED_OPTIONS = ("tol", "max_iter", "mu_init", "bound_push", "bound_frac", "con
 #: one iteration more than before or fewer (heavy_top_rotors order2 at N = 32 to 256: 21-22,
 #: were 23-28), except heavy_top_rotors order2 at N = 16 (28, was 23; IPOPT 22)
 DEFAULT_FATROP: dict[str, Any] = {"watchdog_shortened_iter_trigger": 0, "max_soc": 20}
+#: fatrop's stop at an acceptable point: its error below its acceptable tolerance (its own,
+#: which CasADi's interface does not let us set) for this many iterations in a row. Near
+#: some solutions with active bounds fatrop calls its KKT system indefinite and regularises
+#: it in every iteration, and its last steps converge linearly, or not at all
+#: (quadrotor_min_time, N = 256: 500 iterations, 38 s, the dual infeasibility stuck at
+#: 1e-7); IPOPT finishes from the point it reached, with its multipliers, in a few
+#: iterations (:func:`~ocgroupoid.nlp.backends.policy.in_turn`: 104 + 8 iterations there,
+#: 3.2 s in all). The count is high enough that a slow but converging run ends by itself
+#: (fatrop takes 4-75 iterations in all on every problem file at N = 16 to 256 from the
+#: first guess, scripts/bench_fatrop.py)
+ACCEPTABLE_STOP: dict[str, Any] = {"acceptable_iter": 50}
 #: IPOPT options fatrop has under another name: constr_mult_init_max 0 (our default: start from
 #: zero multipliers, not least-squares ones) is fatrop's lam_max 0 (measured on so3, N = 256:
 #: 7 -> 4 iterations, as IPOPT's; the other problem files unchanged)
@@ -63,9 +75,9 @@ FAILED = "Fatrop_Failed"
 #: by IPOPT's name for the same outcome; CasADi counts only flag 0 as success, so a stop at
 #: an acceptable point (flag 2: the error below ``tol_acceptable`` for ``acceptable_iter``
 #: iterations, not below ``tol``) is not one, as IPOPT's is not for the verdict
-#: (:mod:`~ocgroupoid.verify.verdict`) and the policy runs IPOPT after it
-STATUS = {0: "Solve_Succeeded", 1: "Maximum_Iterations_Exceeded",
-          2: "Solved_To_Acceptable_Level", 3: "Infeasible_Problem_Detected"}
+#: (:mod:`~ocgroupoid.verify.verdict`), and IPOPT finishes from its point (:data:`ACCEPTABLE_STOP`)
+STATUS = {0: "Solve_Succeeded", 1: "Maximum_Iterations_Exceeded", 2: ACCEPTABLE,
+          3: "Infeasible_Problem_Detected"}
 #: fatrop relaxes every inequality bound by this factor, as IPOPT's default
 #: ``bound_relax_factor`` (``lb - eps max(1, |lb|)``), and has no option to turn it off: the
 #: bounds it is given are tightened by as much, so that they hold at the solution to
@@ -133,13 +145,7 @@ class FatropBackend(Backend):
         #: the bounds fatrop is given (:func:`tightened`)
         self.bounds = tightened(nlp.bounds_function)
         self.max_iter = int(ipopt.get("max_iter", 3000))
-        # fatrop's stop at an acceptable point (error below tol_acceptable, not tol, for
-        # acceptable_iter = 15 iterations) is not a success, and IPOPT would solve the start
-        # again: it is off (acceptable_iter past max_iter) unless the ipopt options set it.
-        # Near a solution with active bounds fatrop's steps are regularised and converge
-        # linearly: so3_minimum_time order2 N = 64 stopped there after 29 iterations and
-        # converges in 35 (IPOPT 18)
-        own = {"print_level": 0, **DEFAULT_FATROP, "acceptable_iter": self.max_iter + 1}
+        own = {"print_level": 0, **DEFAULT_FATROP, **ACCEPTABLE_STOP}
         self.jit_compiled = False
         if jit:
             functions, self.jit_compiled = compiled(functions)
@@ -151,6 +157,7 @@ class FatropBackend(Backend):
                                    **{k: v for k, v in ipopt.items() if k in SHARED_OPTIONS},
                                    **{RENAMED_OPTIONS[k]: v for k, v in ipopt.items()
                                       if k in RENAMED_OPTIONS}}}
+        self._graph = graph
         try:
             self.solver = ca.nlpsol(name, "fatrop", graph, self.options)
         except RuntimeError as err:
@@ -206,11 +213,20 @@ class FatropBackend(Backend):
         return Run(sf.x_of(r["x"]), float(r["f"][0]), sf.rows_x(r["lam_g"]), sf.x_of(r["lam_x"]),
                    status, success, iterations, seconds)
 
+    @cached_property
+    def exported_solver(self) -> ca.Function:
+        """:attr:`solver` without the stop at an acceptable point (:data:`ACCEPTABLE_STOP`): the
+        exported C solver has no IPOPT to finish from it. Built on first use."""
+        options = {**self.options, "fatrop": {**self.options["fatrop"],
+                                              "acceptable_iter": self.max_iter + 1}}
+        return ca.nlpsol(f"{self.solver.name()}_exported", "fatrop", self._graph, options)
+
     def graph(self, x0: ca.MX, p: ca.MX, lam_g0: ca.MX | None = None,
               lam_x0: ca.MX | None = None) -> dict[str, Any]:
-        """The same solve as a graph in the original variables (the exported solver):
-        ``x, f, g, lam_g, lam_x``; fatrop has no dual warm start and starts from x0."""
+        """The same solve as a graph in the original variables (the exported solver, which
+        runs to the tolerance: :attr:`exported_solver`): ``x, f, g, lam_g, lam_x``; fatrop
+        has no dual warm start and starts from x0."""
         sf = self.form
-        r = self.solver(**self.arguments(x0, p))
+        r = self.exported_solver(**self.arguments(x0, p))
         return {"x": sf.x_of(r["x"]), "f": r["f"], "g": sf.rows_x(r["g"]),
                 "lam_g": sf.rows_x(r["lam_g"]), "lam_x": sf.x_of(r["lam_x"])}

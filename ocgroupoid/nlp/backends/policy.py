@@ -15,7 +15,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from .base import INTERRUPTED, TIMED_OUT, Attempt, Backend, Run, Start
+from .base import ACCEPTABLE, INTERRUPTED, TIMED_OUT, Attempt, Backend, Run, Start
 
 #: ``objective(x, p)``: the cost of a point, for a run stopped before it had one
 Objective = Callable[[np.ndarray, np.ndarray], float]
@@ -30,25 +30,31 @@ def in_turn(backends: Sequence[Backend], start: Start, objective: Objective,
     """The run of the first backend that succeeds or is stopped by the time or an
     interrupt, else of the last; with the label of who produced it (``fatrop``,
     ``ipopt``, ``ipopt after fatrop``). Its seconds count every run, and its ``earlier``
-    names the runs before it with their status and iterations. ``rescue`` runs after
-    the first backend failed of itself, before the next: its run (in this NLP's variables)
-    is the answer if it succeeded (its label, e.g. ``fatrop through order2``) or was
-    stopped; else the next backend runs (``ipopt after order2 rescue after fatrop``)."""
+    names the runs before it with their status and iterations. A run that stopped at an
+    acceptable point (:data:`ACCEPTABLE`: near a solution, converging slowly) hands the
+    next backend its point and multipliers, a warm start (``ipopt polish after fatrop``);
+    after any other failure the next starts from ``start``. ``rescue`` runs after the first
+    backend failed of itself, not near a solution, before the next: its run (in this NLP's
+    variables) is the answer if it succeeded (its label, e.g. ``fatrop through order2``) or
+    was stopped; else the next backend runs (``ipopt after order2 rescue after fatrop``)."""
     names: list[str] = []
     earlier: list[Attempt] = []
     spent = 0.0
+    polish = False  # the previous run stopped at an acceptable point: start from it
     for i, backend in enumerate(backends):
         run = backend.run(start)
-        names.insert(0, backend.name)
+        names.insert(0, f"{backend.name} polish" if polish else backend.name)
         spent += run.seconds
         last = i == len(backends) - 1
         stopped = run.status in (TIMED_OUT, INTERRUPTED)
-        if not (last or run.success or stopped) and i == 0 and rescue is not None:
+        polish = run.status == ACCEPTABLE
+        if not (last or run.success or stopped or polish) and i == 0 and rescue is not None:
             rescued = rescue(start, run)
             if rescued is not None:
                 earlier.append((names[0], run.status, run.iterations))
                 run, label = rescued
                 earlier += run.earlier  # the rescue's runs before its last
+                polish = run.status == ACCEPTABLE
                 spent += run.seconds
                 names.insert(0, label)
                 stopped = run.status in (TIMED_OUT, INTERRUPTED)
@@ -59,4 +65,6 @@ def in_turn(backends: Sequence[Backend], start: Start, objective: Objective,
                 run = replace(run, f=objective(run.x, start.p))
             return replace(run, seconds=spent, earlier=tuple(earlier)), " after ".join(names)
         earlier.append((names[0], run.status, run.iterations))
+        if polish:
+            start = replace(start, x0=run.x, lam_g0=run.lam_g, lam_x0=run.lam_x)
     raise ValueError("no backend to run")
