@@ -3,8 +3,9 @@
 ``solver.backend: fatrop`` runs fatrop, and when it fails (its Riccati recursion needs every
 stage's reduced Hessian positive definite and regularises until it is: slow or stuck on
 some nonconvex problems) IPOPT from the same start with the time left; when it stalled near
-a solution (its acceptable stop), IPOPT from the point it reached, with its multipliers. A run that used up
-the time, or was interrupted, ends the turn: the next backend would have no time either.
+a solution (its acceptable stop), IPOPT from the point it reached, with its multipliers. A
+run that used up the time, or was interrupted, ends the turn: the next backend would have no
+time either.
 Between the two a rescue may run (:class:`~ocgroupoid.solve.CompiledProblem` gives order4
 one: order2 on the same grid, then fatrop again from its solution).
 """
