@@ -90,3 +90,23 @@ def test_a_primal_dual_warm_start_reaches_the_cold_solution_in_fewer_iterations(
         prev = warm
     with pytest.raises(ConfigError, match="same compiled problem"):
         og.compile_problem(rigid_body(), N=16).solve(warm=prev)
+
+
+def test_a_warm_start_is_heard_and_stopped_like_a_cold_one() -> None:
+    """A primal-dual warm start (a re-solve, a sweep's neighbour, IPOPT's polish after
+    fatrop) hears its listener at every iteration, which stops it by returning True: so a
+    warm solve keeps its deadline and Ctrl-C."""
+    from ocgroupoid.lie import so3
+    from ocgroupoid.nlp.program import Guess
+
+    solver = og.compile_problem(rigid_body(), N=24)
+    tr = solver.transcription
+    prev = solver.solve(multistart=False)
+    axis = np.array([1.0, 2.0, 3.0]) / np.sqrt(14.0)
+    p = tr.pack(final={"R": so3.from_rotvec(axis * 2.6)})
+    warm = Guess("warm start", np.zeros((0, 0)), prev.x, prev.lam_g, prev.lam_x)
+    heard: list[int] = []
+    r = tr.solve(warm, p, lambda i, f, g: heard.append(i) is not None)
+    assert r.success and heard == list(range(r.iterations + 1)), (heard, r.iterations)
+    stopped = tr.solve(warm, p, lambda i, f, g: i >= 1)
+    assert stopped.status == "User_Requested_Stop" and stopped.iterations == 1

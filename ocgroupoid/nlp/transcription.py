@@ -85,8 +85,8 @@ class Transcription(NonlinearProgram):
               ) -> RawResult:
         """Run the backends from ``guess`` with parameters ``p`` (default: the problem's).
         With IPOPT, ``listener(iteration, objective, infeasibility)`` hears every iteration
-        and stops IPOPT by returning True (status ``User_Requested_Stop``), and a guess with
-        multipliers is a primal-dual warm start (no listener). fatrop has neither: it starts
+        and stops IPOPT by returning True (status ``User_Requested_Stop``), a guess with
+        multipliers as well, which is a primal-dual warm start. fatrop has neither: it starts
         from the guess's primal point, in a helper process that is stopped at ``deadline``
         (``time.monotonic()``; default: :attr:`max_seconds` from now), after repeated NaN
         evaluations, or once ``stop()`` is true; when it fails IPOPT solves from the same

@@ -1,10 +1,11 @@
 """``solver.backend: ipopt``: IPOPT on the whole sparse KKT system (MUMPS), through
 ``casadi.nlpsol``, with the stage-wise assembled derivatives in its cache.
 
-Three instances of the one NLP, the last two built on first use: the plain solver (free of
+Instances of the one NLP, all but the first built on first use: the plain solver (free of
 Python: the exported C solver calls it), one with an iteration callback
-(:mod:`~ocgroupoid.nlp.watch`: progress and Ctrl-C) and one started from a primal-dual point
-(IPOPT's ``warm_start_init_point``).
+(:mod:`~ocgroupoid.nlp.watch`: progress, Ctrl-C and the deadline), one started from a
+primal-dual point (IPOPT's ``warm_start_init_point``) and that one with the callback (a
+warm start someone listens to: a polish after fatrop, a sweep's neighbour).
 """
 
 from __future__ import annotations
@@ -14,7 +15,6 @@ from functools import cached_property
 from typing import Any
 
 import casadi as ca
-import numpy as np
 
 from ...errors import ConfigError
 from ..buffered import Buffered
@@ -81,7 +81,6 @@ class IpoptBackend(Backend):
         #: the compilation of jit (or the load from its cache)
         self.jit_seconds = time.perf_counter() - t0
         t0 = time.perf_counter()
-        self._watch: Watch | None = None
         self._calls: dict[int, Buffered] = {}
         try:
             #: the plain IPOPT instance (no Python inside: the exported C solver's)
@@ -93,12 +92,17 @@ class IpoptBackend(Backend):
         self.setup_seconds = time.perf_counter() - t0
 
     @cached_property
+    def watch(self) -> Watch:
+        """The iteration callback of the watched instances (:mod:`~ocgroupoid.nlp.watch`),
+        armed per solve."""
+        return Watch(self.nx, self.ng, self.np)
+
+    @cached_property
     def watched_solver(self) -> ca.Function:
-        """:attr:`solver` with an iteration callback (:mod:`~ocgroupoid.nlp.watch`), built on
-        first use (the plain :attr:`solver` stays free of Python, for the C export)."""
-        self._watch = Watch(self.nx, self.ng, self.np)
+        """:attr:`solver` with the iteration callback (:attr:`watch`), built on first use (the
+        plain :attr:`solver` stays free of Python, for the C export)."""
         return ca.nlpsol(self.function_name, "ipopt", self.nlp,
-                         {**self.options, "iteration_callback": self._watch})
+                         {**self.options, "iteration_callback": self.watch})
 
     @cached_property
     def warm_solver(self) -> ca.Function:
@@ -107,19 +111,25 @@ class IpoptBackend(Backend):
         near the solution stays near it), built on first use."""
         return ca.nlpsol(self.function_name, "ipopt", self.nlp, {**self.options, **WARM_IPOPT})
 
+    @cached_property
+    def watched_warm_solver(self) -> ca.Function:
+        """:attr:`warm_solver` with the iteration callback (:attr:`watch`), built on first
+        use."""
+        return ca.nlpsol(self.function_name, "ipopt", self.nlp,
+                         {**self.options, **WARM_IPOPT, "iteration_callback": self.watch})
+
     def run(self, start: Start) -> Run:
-        """IPOPT from ``start``: the warm solver when it carries multipliers, else the
-        watched one when someone listens, else the plain one. Its deadline is IPOPT's own
-        ``max_wall_time`` and the listener's (which stops IPOPT by returning True)."""
+        """IPOPT from ``start``: warm (:attr:`warm_solver`) when it carries multipliers, and
+        watched (:attr:`watched_solver`, :attr:`watched_warm_solver`) when someone listens.
+        Its deadline is IPOPT's own ``max_wall_time`` and the listener's (which stops IPOPT
+        by returning True), warm or cold."""
         bounds = self._call(self.bounds)(p=start.p)
-        solver = self.solver
-        duals: dict[str, np.ndarray] = {}
-        if start.lam_g0 is not None and start.lam_x0 is not None:
-            solver, duals = self.warm_solver, {"lam_g0": start.lam_g0, "lam_x0": start.lam_x0}
-        elif start.listener is not None:
-            solver = self.watched_solver
-            assert self._watch is not None
-            self._watch.start(start.listener, bounds["lbg"], bounds["ubg"])
+        duals = {"lam_g0": start.lam_g0, "lam_x0": start.lam_x0} if start.warm else {}
+        if start.listener is None:
+            solver = self.warm_solver if start.warm else self.solver
+        else:
+            solver = self.watched_warm_solver if start.warm else self.watched_solver
+            self.watch.start(start.listener, bounds["lbg"], bounds["ubg"])
         call = self._call(solver)
         t0 = time.perf_counter()
         r = call(x0=start.x0, p=start.p, **bounds, **duals)
