@@ -1,15 +1,20 @@
 """Where the time of one iteration goes (issue 26), on every problem file and both backends.
 
-Per problem file (its own scheme and N) and backend (IPOPT; fatrop), one solve from the first
-geodesic guess (the backend's CasADi solver called directly: no fallback), timed by CasADi's
-own counters (``solver.stats()``): the wall time of the
-function evaluations IPOPT or fatrop asked for (objective, constraints, gradient, constraint
-Jacobian, Hessian of the Lagrangian: ``t_wall_nlp_*``), the rest of the solver's time (the KKT
-factorisations and solves — MUMPS for IPOPT, fatrop's stage-wise Riccati — and the method's
-own linear algebra), and the Python around the call (our wall time minus the solver's). Each
-divided by the iterations, in milliseconds. The median of :data:`REPEATS` solves per row.
+Per problem file (its own scheme and N), backend (IPOPT; fatrop) and evaluation (CasADi's
+virtual machine, ``vm``; compiled, ``jit``: the best configurations' evaluation), solves from
+the first geodesic guess (the backend's CasADi solver called directly: no fallback), timed by
+CasADi's own counters (``solver.stats()``, with ``record_time``): the wall time of the function
+evaluations IPOPT or fatrop asked for (objective, constraints, gradient, constraint Jacobian,
+Hessian of the Lagrangian: ``t_wall_nlp_*``), the rest of the solver's call (``t_wall_total``
+less those: the KKT factorisations and solves — MUMPS for IPOPT, fatrop's stage-wise Riccati
+and its set-up in every call — and the method's own linear algebra), and the Python around
+the call (our wall time minus the solver's: CasADi's conversion of the numpy inputs and
+outputs, which the backends' own calls avoid, :mod:`~ocgroupoid.nlp.buffered`, and what of
+fatrop's set-up falls outside CasADi's timer). Each divided by the iterations, in
+milliseconds. The median of :data:`REPEATS` solves per row.
 
-Writes ``bench_iteration.json`` and ``bench_iteration.png`` (stacked bars per file and backend).
+Writes ``bench_iteration.json`` and ``bench_iteration.png`` (stacked bars per file, backend
+and evaluation).
 """
 
 from __future__ import annotations
@@ -19,6 +24,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+import casadi as ca
 import matplotlib
 
 matplotlib.use("Agg")
@@ -38,10 +44,11 @@ REPEATS = 3
 QUICK = ("so3_rest_to_rest",)
 
 
-def one(path: Path, backend: str) -> dict[str, Any] | None:
-    """Median per-iteration breakdown of :data:`REPEATS` solves of the file on ``backend``
-    (None when the backend is not offered for the file's NLP)."""
-    cfg = files.load(path, [f"solver.backend={backend}"])
+def one(path: Path, backend: str, jit: bool) -> dict[str, Any] | None:
+    """Median per-iteration breakdown of :data:`REPEATS` solves of the file on ``backend``,
+    its functions compiled if ``jit`` (None when the backend is not offered for the file's
+    NLP)."""
+    cfg = files.load(path, [f"solver.backend={backend}", f"solver.jit={str(jit).lower()}"])
     solver = compile_problem(files.build(cfg), files.method(cfg), files.options(cfg))
     tr = solver.transcription
     runner = next((b for b in tr.backends if b.name == backend), None)
@@ -54,40 +61,54 @@ def one(path: Path, backend: str) -> dict[str, Any] | None:
     else:
         lbg, ubg, lbx, ubx = runner.bounds(p)
         arguments = {"x0": x0, "p": p, "lbg": lbg, "ubg": ubg, "lbx": lbx, "ubx": ubx}
+    # the backend's solver with CasADi's timer of the whole call (record_time), which the
+    # backend's own leaves out; called plainly (through buffers, as the backends call
+    # theirs, CasADi's counters add up over the calls and the total reads 0)
+    timed = ca.nlpsol("timed", backend, runner.nlp, {**runner.options, "record_time": True})
     rows = []
     for _ in range(REPEATS):
         t0 = time.perf_counter()
-        runner.solver(**arguments)
+        timed(**arguments)
         wall = time.perf_counter() - t0
-        stats = runner.solver.stats()
+        stats = timed.stats()
         its = max(int(stats["iter_count"]), 1)
         evals = {name: float(stats.get(f"t_wall_{key}", 0.0)) / its * 1e3
                  for key, name in EVALUATIONS.items()}
-        total = float(stats.get("t_wall_total", wall))
+        total = float(stats["t_wall_total"])
         rows.append({**evals, "solver": total / its * 1e3 - sum(evals.values()),
                      "python": (wall - total) / its * 1e3, "per_iteration": wall / its * 1e3,
                      "iterations": int(stats["iter_count"]), "success": bool(stats["success"])})
     best = {k: statistics.median(r[k] for r in rows) for k in rows[0]
             if k not in ("success", "iterations")}
-    return {"problem": path.stem, "backend": backend, "N": solver.disc.N,
+    return {"problem": path.stem, "backend": backend, "evaluation": "jit" if jit else "vm",
+            "N": solver.disc.N,
             "scheme": cfg.file.discretization.scheme, "iterations": rows[-1]["iterations"],
             "success": rows[-1]["success"], **best}
 
 
 def chart(rows: list[dict[str, Any]], path: Path) -> None:
-    """Stacked per-iteration bars: evaluations, the solver's own time, Python."""
+    """Stacked per-iteration bars (evaluations, the solver's own time, Python), one panel per
+    evaluation (virtual machine, compiled)."""
     parts = list(EVALUATIONS.values()) + ["solver", "python"]
-    labels = [f"{r['problem']}\n{r['backend']}" for r in rows]
-    fig, ax = plt.subplots(figsize=(max(7.0, 0.55 * len(rows) + 1.5), 4.5))
-    bottom = [0.0] * len(rows)
-    for part in parts:
-        v = [max(r[part], 0.0) for r in rows]
-        ax.bar(range(len(rows)), v, bottom=bottom, label=part)
-        bottom = [b + x for b, x in zip(bottom, v)]
-    ax.set_xticks(range(len(rows)), labels, rotation=90, fontsize=7)
-    ax.set_ylabel("ms per iteration")
-    ax.set_title("Where one iteration's time goes (each file at its own scheme and N)")
-    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
+    panels = [e for e in ("vm", "jit") if any(r["evaluation"] == e for r in rows)]
+    n = max(sum(r["evaluation"] == e for r in rows) for e in panels)
+    fig, axes = plt.subplots(len(panels), 1, figsize=(max(7.0, 0.45 * n + 2.5),
+                                                      3.8 * len(panels) + 0.6), squeeze=False)
+    for ax, evaluation in zip(axes[:, 0], panels):
+        shown = [r for r in rows if r["evaluation"] == evaluation]
+        bottom = [0.0] * len(shown)
+        for part in parts:
+            v = [max(r[part], 0.0) for r in shown]
+            ax.bar(range(len(shown)), v, bottom=bottom,
+                   label="solver's own" if part == "solver" else part)
+            bottom = [b + x for b, x in zip(bottom, v)]
+        ax.set_xticks(range(len(shown)), [f"{r['problem']}\n{r['backend']}" for r in shown],
+                      rotation=90, fontsize=7)
+        ax.set_ylabel("ms per iteration")
+        ax.set_title("evaluated by CasADi's virtual machine" if evaluation == "vm" else
+                     "compiled evaluation (jit)", fontsize=9)
+    axes[0, 0].legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
+    fig.suptitle("Where one iteration's time goes (each file at its own scheme and N)")
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
@@ -99,20 +120,22 @@ def main() -> None:
     if args.quick:
         paths = [p for p in paths if p.stem in QUICK]
     rows: list[dict[str, Any]] = []
-    with steps(2 * len(paths)) as step:
+    with steps(4 * len(paths)) as step:
         for path in paths:
             for backend in ("ipopt", "fatrop"):
-                step(f"{path.stem}: {backend}")
-                row = one(path, backend)
-                if row is not None:
-                    rows.append(row)
+                for jit in (False, True):
+                    step(f"{path.stem}: {backend}{' jit' if jit else ''}")
+                    row = one(path, backend, jit)
+                    if row is not None:
+                        rows.append(row)
     args.out.mkdir(parents=True, exist_ok=True)
     write_summary(args.out / "bench_iteration.json", {"rows": rows})
     chart(rows, args.out / "bench_iteration.png")
-    print(f"{'problem':24} {'backend':7} {'N':>4} {'it':>4} {'ms/it':>7} "
+    print(f"{'problem':24} {'backend':7} {'eval':4} {'N':>4} {'it':>4} {'ms/it':>7} "
           + " ".join(f"{n[:8]:>8}" for n in list(EVALUATIONS.values()) + ["solver", "python"]))
     for r in rows:
-        print(f"{r['problem']:24} {r['backend']:7} {r['N']:>4} {r['iterations']:>4} "
+        print(f"{r['problem']:24} {r['backend']:7} {r['evaluation']:4} {r['N']:>4} "
+              f"{r['iterations']:>4} "
               f"{r['per_iteration']:7.3f} "
               + " ".join(f"{r[n]:8.3f}" for n in list(EVALUATIONS.values()) + ["solver",
                                                                                  "python"]))

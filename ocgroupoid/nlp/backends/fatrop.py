@@ -157,7 +157,8 @@ class FatropBackend(Backend):
                                    **{k: v for k, v in ipopt.items() if k in SHARED_OPTIONS},
                                    **{RENAMED_OPTIONS[k]: v for k, v in ipopt.items()
                                       if k in RENAMED_OPTIONS}}}
-        self._graph = graph
+        #: the NLP in stage form, as nlpsol is given it
+        self.nlp = graph
         try:
             self.solver = ca.nlpsol(name, "fatrop", graph, self.options)
         except RuntimeError as err:
@@ -219,7 +220,7 @@ class FatropBackend(Backend):
         exported C solver has no IPOPT to finish from it. Built on first use."""
         options = {**self.options, "fatrop": {**self.options["fatrop"],
                                               "acceptable_iter": self.max_iter + 1}}
-        return ca.nlpsol(f"{self.solver.name()}_exported", "fatrop", self._graph, options)
+        return ca.nlpsol(f"{self.solver.name()}_exported", "fatrop", self.nlp, options)
 
     def graph(self, x0: ca.MX, p: ca.MX, lam_g0: ca.MX | None = None,
               lam_x0: ca.MX | None = None) -> dict[str, Any]:
