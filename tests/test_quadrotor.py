@@ -168,8 +168,26 @@ def test_controls_of_their_own_are_linear_and_bounded_on_the_whole_interval() ->
     z = ca.SX.sym("z", block.fun.size1_in(0))
     J = ca.jacobian(block.fun(z)[1], z[:block.n_var])
     ends = [i for i, name in enumerate(block.rows) if name.endswith(("(start)", "(end)"))]
-    assert len(ends) == 2 * 4  # f and three torques at both ends
+    assert len(ends) == len(block.rows) == 2 * 4  # f and three torques at both ends, only
     assert all(J[i, :].nnz() == 1 for i in ends)
+
+
+@pytest.mark.parametrize("extra, points", [(None, 2), ("f squared", 4), ("spin", 4)])
+def test_bounds_on_the_controls_line_hold_at_its_ends_only(extra: str | None,
+                                                           points: int) -> None:
+    """Bounds affine in the controls of their own alone are lines on an interval, within
+    their bounds on the whole interval once within them at its ends: order4 holds them
+    there only (the Gauss-point rows would be implied). A bound that is not affine in the
+    controls (f^2), or one on the motion (a body rate), keeps the four bound points."""
+    pb = quadrotor()
+    if extra == "f squared":
+        pb.bound(pb.U[0] ** 2, None, 400.0, name="f squared")
+    elif extra == "spin":
+        pb.bound(pb.y[2], -10.0, 10.0, name="spin")
+    tr = og.compile_problem(pb, N=8, scheme="order4").transcription
+    assert tr.scheme.bound_times.size == points
+    block = next(b for b in tr.blocks if b.name == "interval_bounds")
+    assert len(block.rows) == points * len(tr.scheme.stages.inequality_names)
 
 
 def test_the_replay_drives_the_true_vehicle() -> None:

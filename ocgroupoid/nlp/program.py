@@ -148,11 +148,14 @@ class NonlinearProgram:
         the rows a phase holds at one side turned into equalities there
         (:attr:`Discretization.active`)."""
         per_phase = np.repeat(np.arange(len(self.disc.phases)), self.disc.phases)
-        # held at the first Gauss point of each interval, bounded at the others: one equality
-        # per interval (more would over-determine the interval's unknowns where a problem has
-        # conditions that its conservation laws already imply); the optimum holds the rest
+        # held at the first Gauss point of each interval (at its first point where the bounds
+        # hold at its ends only), bounded at the others: one equality per interval (more
+        # would over-determine the interval's unknowns where a problem has conditions that
+        # its conservation laws already imply); the optimum holds the rest
         times = np.asarray(getattr(self.scheme, "bound_times", np.zeros(b.points)))
         gauss = np.isclose(times, GAUSS2[0])
+        if not gauss.any():
+            gauss = np.arange(times.size) == 0
         lo_cols, hi_cols = [], []
         for c in range(b.ncols):
             side = np.concatenate([np.asarray(self.disc.active[per_phase[c]]) * int(g)

@@ -61,7 +61,8 @@ DEFAULT_FATROP: dict[str, Any] = {"watchdog_shortened_iter_trigger": 0, "max_soc
 #: (quadrotor_min_time, N = 256: 500 iterations, 38 s, the dual infeasibility stuck at
 #: 1e-7); IPOPT finishes from the point it reached, with its multipliers, in a few
 #: iterations (:func:`~ocgroupoid.nlp.backends.policy.in_turn`: 104 + 8 iterations there,
-#: 3.2 s in all). The count is high enough that a slow but converging run ends by itself
+#: 3.2 s in all; 123 + 6 since its bounds hold at the interval ends only). The count is
+#: high enough that a slow but converging run ends by itself
 #: (fatrop takes 4-75 iterations in all on every problem file at N = 16 to 256 from the
 #: first guess, scripts/bench_fatrop.py)
 ACCEPTABLE_STOP: dict[str, Any] = {"acceptable_iter": 50}
