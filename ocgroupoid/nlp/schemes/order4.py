@@ -191,7 +191,7 @@ class QuadraticGauss(Scheme):
         H = ca.vertcat(*[at(ineq, float(c), u_at(float(c))) for c in self.bound_times]) \
             if ineq.numel() else ca.SX(0, 1)
         #: ``interval(s_k, y_k, y_{k+1}, b_k, u_k, T, P) -> (L_d, Phi_d, H)``: Phi_d stacks
-        #: the two Gauss points, the bounds' expressions H the :data:`BOUND_POINTS`; u_k: the
+        #: the two Gauss points, the bounds' expressions H the :attr:`bound_times`; u_k: the
         #: controls of their own at the interval's ends (empty when they are recovered)
         self.interval = ca.Function("interval", args, [L, Phi, H], names, ["L", "Phi", "H"])
         #: ``increment(y_k, y_{k+1}, b_k, T) -> W_k``, exponential coordinates of the step
