@@ -97,26 +97,31 @@ class IpoptBackend(Backend):
         armed per solve."""
         return Watch(self.nx, self.ng, self.np)
 
+    def _instance(self, *extra: dict[str, Any]) -> ca.Function:
+        """Another IPOPT instance of the NLP: :attr:`options` with ``extra`` over them."""
+        options = dict(self.options)
+        for more in extra:
+            options.update(more)
+        return ca.nlpsol(self.function_name, "ipopt", self.nlp, options)
+
     @cached_property
     def watched_solver(self) -> ca.Function:
         """:attr:`solver` with the iteration callback (:attr:`watch`), built on first use (the
         plain :attr:`solver` stays free of Python, for the C export)."""
-        return ca.nlpsol(self.function_name, "ipopt", self.nlp,
-                         {**self.options, "iteration_callback": self.watch})
+        return self._instance({"iteration_callback": self.watch})
 
     @cached_property
     def warm_solver(self) -> ca.Function:
         """:attr:`solver` started from a given primal-dual point (IPOPT's
         ``warm_start_init_point``, its bound pushes small and mu_init low, so that a point
         near the solution stays near it), built on first use."""
-        return ca.nlpsol(self.function_name, "ipopt", self.nlp, {**self.options, **WARM_IPOPT})
+        return self._instance(WARM_IPOPT)
 
     @cached_property
     def watched_warm_solver(self) -> ca.Function:
         """:attr:`warm_solver` with the iteration callback (:attr:`watch`), built on first
         use."""
-        return ca.nlpsol(self.function_name, "ipopt", self.nlp,
-                         {**self.options, **WARM_IPOPT, "iteration_callback": self.watch})
+        return self._instance(WARM_IPOPT, {"iteration_callback": self.watch})
 
     def run(self, start: Start) -> Run:
         """IPOPT from ``start``: warm (:attr:`warm_solver`) when it carries multipliers, and
