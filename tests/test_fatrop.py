@@ -54,27 +54,38 @@ STAGED = [("so3_rest_to_rest", "order2"), ("so3_rest_to_rest", "order4"),
 
 @pytest.mark.parametrize("name,scheme", STAGED, ids=[f"{n}-{s}" for n, s in STAGED])
 def test_stage_form_is_the_same_nlp_in_stage_order(name: str, scheme: str) -> None:
-    """At a random point: the same cost, the original rows permuted, copies satisfied; every
-    row reads one stage (a gap row also x_{k+1}, once, with coefficient +1) and the Hessian
-    of the Lagrangian is block diagonal by stage (fatrop drops what lies outside)."""
+    """At a random point: the same cost, the original rows permuted, copies satisfied, each
+    scaled by its factor at that point (IPOPT's gradient-based scaling: no row's gradient
+    above the file's ``nlp_scaling_max_gradient``, the gap rows unscaled); every row reads
+    one stage (a gap row also x_{k+1}, once, with coefficient +1) and the Hessian of the
+    Lagrangian is the scaled one, block diagonal by stage (fatrop drops what lies outside)."""
     tr = transcription(name, scheme, N=8, backend="fatrop")
     sf = tr.fatrop.form
     rng = np.random.default_rng(0)
     p = tr.pack()
     x = tr.point(tr.guesses(p)[0], p) + 0.01 * rng.standard_normal(tr.nx)
     z = sf.z_of(x)
+    q = tr.fatrop.arguments(x, p)["p"]
+    s, s_f = q[p.size:-1], q[-1]
+    assert np.all(s[sf.gap_rows] == 1.0) and np.all((0 < s) & (s <= 1)) and 0 < s_f <= 1
     nlp = tr.fatrop.solver
-    f_z = float(nlp.get_function("nlp_f")(z, p))
-    g_z = np.array(nlp.get_function("nlp_g")(z, p)).ravel()
-    assert f_z == pytest.approx(float(tr.f_fun(x, p)), rel=1e-13)
-    np.testing.assert_allclose(sf.rows_x(g_z), np.array(tr.g_fun(x, p)).ravel(), rtol=0,
+    f_z = float(nlp.get_function("nlp_f")(z, q))
+    g_z = np.array(nlp.get_function("nlp_g")(z, q)).ravel()
+    assert f_z == pytest.approx(s_f * float(tr.f_fun(x, p)), rel=1e-13)
+    np.testing.assert_allclose(sf.rows_x(g_z / s), np.array(tr.g_fun(x, p)).ravel(), rtol=0,
                                atol=1e-13)
     assert np.all(g_z[sf.rank[sf.n_rows:]] == 0.0)  # the copies hold their variables
     assert sum(sf.nx) + sum(sf.nu) == sf.nz and sum(sf.ng) + sum(sf.nx[1:]) == g_z.size
+    ipopt = files.load(ROOT / "problems" / f"{name}.yaml").file.solver.ipopt
+    max_gradient = float(ipopt.get("nlp_scaling_max_gradient", 100.0))
+    assert name != "cart_pole" or np.any(s < 1)  # its file scales at 10
+    scaled_jac = np.abs(np.array(ca.DM(nlp.get_function("nlp_jac_g")(z, q)[1])))
+    assert np.all(scaled_jac[~sf.gap_rows].max(axis=1, initial=0.0)
+                  <= max_gradient * (1 + 1e-12))
     # rows in fatrop's order: per stage k, nx[k+1] gap rows, then ng[k] stage rows
     stage = stage_of_z(sf)
     first = np.cumsum([0] + [nx + nu for nx, nu in zip(sf.nx, sf.nu)])
-    _, jac = nlp.get_function("nlp_jac_g")(z, p)
+    _, jac = nlp.get_function("nlp_jac_g")(z, q)
     jac = ca.DM(jac)
     rows, cols = (np.array(v) for v in jac.sparsity().get_triplet())
     values = np.array(jac.nonzeros())
@@ -91,7 +102,7 @@ def test_stage_form_is_the_same_nlp_in_stage_order(name: str, scheme: str) -> No
             assert set(stage[cols[rows == r + i]]) <= {k}
         r += sf.ng[k]
     lam = rng.standard_normal(g_z.size)
-    _, hess = nlp.get_function("nlp_hess_l")(z, p, 1.0, lam)
+    _, hess = nlp.get_function("nlp_hess_l")(z, q, 1.0, lam)
     hr, hc = ca.DM(hess).sparsity().get_triplet()
     assert np.array_equal(stage[np.array(hr)], stage[np.array(hc)])
 
@@ -152,6 +163,8 @@ def test_fatrop_reaches_ipopts_cost(name: str, scheme: str) -> None:
     if b.backend == "fatrop" and same_point:  # the multipliers map back to the original rows
         scale = max(1.0, float(np.max(np.abs(a.lam_g))))
         assert np.max(np.abs(b.lam_g - a.lam_g)) <= 1e-5 * scale
+        scale = max(1.0, float(np.max(np.abs(a.lam_x))))
+        assert np.max(np.abs(b.lam_x - a.lam_x)) <= 1e-5 * scale
 
 
 def test_solution_json_names_the_backend(tmp_path: Path) -> None:

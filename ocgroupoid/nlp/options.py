@@ -51,7 +51,7 @@ class SolverOptions:
     #: ``ipopt`` or ``fatrop`` (:data:`BACKENDS`)
     backend: str = DEFAULT_BACKEND
     #: IPOPT's options over :data:`~ocgroupoid.nlp.backends.ipopt.DEFAULT_IPOPT` (fatrop
-    #: reads the ones it shares)
+    #: reads the ones it shares, and is given the rows scaled as ``nlp_scaling_*`` says)
     ipopt: dict[str, Any] = field(default_factory=dict)
     #: evaluate the NLP's Functions as compiled C (:mod:`~ocgroupoid.nlp.jit`)
     jit: bool = False

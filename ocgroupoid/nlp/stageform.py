@@ -69,6 +69,16 @@ class StageForm:
         return index
 
     @cached_property
+    def gap_rows(self) -> np.ndarray:
+        """Whether each stage-form row is a gap row (``x_{k+1} - F_k = 0``)."""
+        gap = np.zeros(self.order.size, dtype=bool)
+        start = 0
+        for nx_next, ng in zip(self.nx[1:], self.ng):
+            gap[start:start + nx_next] = True
+            start += nx_next + ng
+        return gap
+
+    @cached_property
     def rank(self) -> np.ndarray:
         """Stage-form row of each assembled row (the inverse of :attr:`order`)."""
         r = np.empty_like(self.order)
@@ -99,20 +109,20 @@ class StageForm:
         return _pick(z, self.z_slot)
 
 
-Values = TypeVar("Values", np.ndarray, ca.MX)
+Values = TypeVar("Values", np.ndarray, ca.MX, ca.SX)
 
 
 def _pick(v: Values, index: np.ndarray) -> Values:
     """``v[index]`` of a vector of numbers or a graph."""
-    if isinstance(v, ca.MX):
+    if isinstance(v, (ca.MX, ca.SX)):
         return v[index.tolist()]
     return np.asarray(v, dtype=float).ravel()[index]
 
 
 def _append(v: Values, n: int, value: float) -> Values:
     """``v`` followed by n copies of ``value``."""
-    if isinstance(v, ca.MX):
-        return ca.vertcat(v, ca.MX(ca.DM.ones(n) * value))
+    if isinstance(v, (ca.MX, ca.SX)):
+        return ca.vertcat(v, type(v)(ca.DM.ones(n) * value))
     return np.concatenate([np.asarray(v, dtype=float).ravel(), np.full(n, value)])
 
 

@@ -9,7 +9,10 @@ rows permuted into stage order and in the signatures fatrop asks for (the Hessia
 its upper triangle, with the gradient of the Lagrangian, both summed from the stages).
 
 fatrop reads the IPOPT options it shares (:data:`SHARED_OPTIONS`, :data:`RENAMED_OPTIONS`)
-over its own (:data:`DEFAULT_FATROP`: no watchdog, more second-order corrections); it has no
+over its own (:data:`DEFAULT_FATROP`: no watchdog, more second-order corrections). It has no
+scaling of its own: it is given the NLP scaled as IPOPT scales it (:func:`row_scales`,
+:func:`_scales`), its rows and cost multiplied by factors computed at the start and passed
+as parameters, and its solution is mapped back (:meth:`FatropBackend.unscaled`). It has no
 dual warm start (a warm start gives it the primal point) and no iteration callback, no time
 limit, and it loops without bound on some singular KKT systems: every solve runs in a helper
 process (:mod:`~ocgroupoid.nlp.isolated`), stopped at its deadline, after repeated
@@ -50,7 +53,8 @@ SHARED_OPTIONS = ("tol", "max_iter", "mu_init", "bound_push", "bound_frac", "con
 #: to 20 second-order corrections (fatrop's default 4; each must cut the infeasibility by
 #: kappa_soc = 0.99) the full step is corrected back onto the constraints and accepted: the
 #: cart-pole order4 at N = 32, 64, 128, 256 converges in 25, 32, 30, 40 iterations (IPOPT 27,
-#: 56, 67, 59; without the watchdog alone 77, 127, 243, 490). Every other run takes at most
+#: 56, 67, 59; without the watchdog alone 77, 127, 243, 490; since fatrop gets IPOPT's scaling
+#: of the file's rows, 17, 21, 24, 33). Every other run takes at most
 #: one iteration more than before or fewer (heavy_top_rotors order2 at N = 32 to 256: 21-22,
 #: were 23-28), except heavy_top_rotors order2 at N = 16 (28, was 23; IPOPT 22)
 DEFAULT_FATROP: dict[str, Any] = {"watchdog_shortened_iter_trigger": 0, "max_soc": 20}
@@ -86,13 +90,18 @@ STATUS = {0: "Solve_Succeeded", 1: "Maximum_Iterations_Exceeded", 2: ACCEPTABLE,
 BOUND_RELAX = 1e-8
 
 
-def tightened(bounds: ca.Function) -> ca.Function:
-    """``bounds(p) -> (lbg, ubg, lbx, ubx)`` with every inequality bound moved inwards by
-    fatrop's relaxation (:data:`BOUND_RELAX`); equalities (lb = ub) and infinite bounds as
-    they are, and bounds closer than the two moves meet at their midpoint."""
-    p = ca.SX.sym("p", bounds.size1_in(0))
+def tightened(bounds: ca.Function, sf: StageForm) -> ca.Function:
+    """``fatrop_bounds(p, s) -> (lbg, ubg, lbx, ubx)``: the bounds of ``bounds(p) -> (lbg, ubg,
+    lbx, ubx)`` in stage form (:class:`StageForm`), the rows multiplied by their scales ``s``
+    (:func:`_scales`), then every inequality bound moved inwards by fatrop's relaxation
+    (:data:`BOUND_RELAX`, in the scaled units fatrop relaxes in); equalities (lb = ub) and
+    infinite bounds as they are, and bounds closer than the two moves meet at their
+    midpoint."""
+    p, s = ca.SX.sym("p", bounds.size1_in(0)), ca.SX.sym("s", sf.order.size)
+    lbg, ubg, lbx, ubx = bounds(p)
+    staged = [s * sf.rows_z(lbg), s * sf.rows_z(ubg), *sf.bounds_z(lbx, ubx)]
     out = []
-    for lb, ub in zip(*[iter(bounds(p))] * 2):
+    for lb, ub in zip(*[iter(staged)] * 2):
         lo = lb + BOUND_RELAX * ca.fmax(1.0, ca.fabs(lb))
         up = ub - BOUND_RELAX * ca.fmax(1.0, ca.fabs(ub))
         finite_lo, finite_up = lb > -np.inf, ub < np.inf
@@ -101,12 +110,65 @@ def tightened(bounds: ca.Function) -> ca.Function:
         moved = lb < ub
         out.append(ca.if_else(moved * finite_lo, ca.if_else(cross, mid, lo), lb))
         out.append(ca.if_else(moved * finite_up, ca.if_else(cross, mid, up), ub))
-    return ca.Function("fatrop_bounds", [p], out, ["p"], ["lbg", "ubg", "lbx", "ubx"])
+    return ca.Function("fatrop_bounds", [p, s], out, ["p", "s"], ["lbg", "ubg", "lbx", "ubx"])
+
+
+def row_scales(options: dict[str, Any]) -> tuple[float, float] | None:
+    """IPOPT's gradient-based scaling as fatrop gets it: ``(max_gradient, min_value)`` from the
+    shared options (``nlp_scaling_max_gradient``, default 100; ``nlp_scaling_min_value``,
+    default 1e-8), or None where ``nlp_scaling_method`` is not ``gradient-based``. IPOPT's
+    target gradients (``nlp_scaling_obj_target_gradient``, ``..._constr_target_gradient``) are
+    IPOPT's alone."""
+    if options.get("nlp_scaling_method", "gradient-based") != "gradient-based":
+        return None
+    return (float(options.get("nlp_scaling_max_gradient", 100.0)),
+            float(options.get("nlp_scaling_min_value", 1e-8)))
+
+
+def _scales(functions: dict[str, ca.Function], sf: StageForm, np_: int,
+            scaling: tuple[float, float] | None) -> ca.Function:
+    """``scales(x, p) -> (s, s_f)``: IPOPT's gradient-based scaling at the start (its
+    implementation paper, Wächter & Biegler 2006, sec. 3.8): each row, and the objective,
+    multiplied by ``max(min_value, min(1, max_gradient / |gradient|_inf))``, so that no
+    gradient at the start exceeds ``max_gradient``; ones without scaling. The gap rows keep
+    scale 1: fatrop reads ``x_{k+1}`` in them with coefficient 1. The gradients are those of
+    fatrop's own (compiled, where ``jit``) Functions at scale 1."""
+    z, p = ca.MX.sym("z", sf.nz), ca.MX.sym("p", np_)
+    n_rows, gap = sf.order.size, sf.gap_rows
+    if scaling is None:
+        return ca.Function("fatrop_scales", [z, p], [ca.DM.ones(n_rows), 1.0],
+                           ["x", "p"], ["s", "s_f"])
+    max_gradient, min_value = scaling
+    unit = ca.vertcat(p, ca.DM.ones(n_rows + 1))
+    _, jac = functions["nlp_jac_g"](z, unit)
+    f_grad = functions["nlp_grad_f"](z, unit)
+    # |J_ij| gathered into columns: column k holds each row's k-th nonzero (or a zero past
+    # the last), so that the rows' maxima are a few vector operations, not one per row
+    rows, _ = jac.sparsity().get_triplet()
+    nnz = len(rows)
+    by_row: list[list[int]] = [[] for _ in range(n_rows)]
+    for k, r in enumerate(rows):
+        if not gap[r]:
+            by_row[r].append(k)
+    padded = ca.vertcat(ca.fabs(jac.nz[:]), 0.0)
+    largest: ca.MX = ca.MX.zeros(n_rows)
+    for k in range(max(map(len, by_row), default=0)):
+        largest = ca.fmax(largest, padded[[ks[k] if k < len(ks) else nnz for ks in by_row]])
+
+    def scale(g: ca.MX) -> ca.MX:
+        return ca.fmax(min_value, ca.fmin(1.0, max_gradient / g))
+
+    return ca.Function("fatrop_scales", [z, p], [scale(largest), scale(ca.mmax(ca.fabs(f_grad)))],
+                       ["x", "p"], ["s", "s_f"])
 
 
 def _functions(sf: StageForm, np_: int) -> tuple[dict[str, Any], dict[str, ca.Function]]:
-    """The NLP dict and the five Functions fatrop evaluates, in stage-form order."""
+    """The NLP dict and the five Functions fatrop evaluates, in stage-form order, over the
+    parameters ``q = [p; s; s_f]``: the rows multiplied by ``s`` and the objective by ``s_f``
+    (:func:`_scales` gives them at a start)."""
     z, p = ca.MX.sym("z", sf.nz), ca.MX.sym("p", np_)
+    s, s_f = ca.MX.sym("s", sf.order.size), ca.MX.sym("s_f")
+    q = ca.vertcat(p, s, s_f)
     fns = assemble(sf.blocks, z, p, whole=True)
     order = sf.order.tolist()
     g = fns["g"][order]
@@ -114,17 +176,20 @@ def _functions(sf: StageForm, np_: int) -> tuple[dict[str, Any], dict[str, ca.Fu
     jac = jac[order, :]
     f, grad_f = fns["nlp_grad_f"](z, p)
     lam_f, lam = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", sf.order.size)
-    grad_l, hess = fns["nlp_hess_l"](z, p, lam_f, lam[sf.rank.tolist()])
+    # the Lagrangian of the scaled NLP is the original's with scaled multipliers
+    grad_l, hess = fns["nlp_hess_l"](z, p, s_f * lam_f, (s * lam)[sf.rank.tolist()])
     functions = {
-        "nlp_f": ca.Function("nlp_f", [z, p], [fns["f"]], ["x", "p"], ["f"]),
-        "nlp_g": ca.Function("nlp_g", [z, p], [g], ["x", "p"], ["g"]),
-        "nlp_grad_f": ca.Function("nlp_grad_f", [z, p], [grad_f], ["x", "p"], ["grad_f_x"]),
-        "nlp_jac_g": ca.Function("nlp_jac_g", [z, p], [g, jac], ["x", "p"], ["g", "jac_g_x"]),
-        "nlp_hess_l": ca.Function("nlp_hess_l", [z, p, lam_f, lam], [grad_l, hess],
+        "nlp_f": ca.Function("nlp_f", [z, q], [s_f * fns["f"]], ["x", "p"], ["f"]),
+        "nlp_g": ca.Function("nlp_g", [z, q], [s * g], ["x", "p"], ["g"]),
+        "nlp_grad_f": ca.Function("nlp_grad_f", [z, q], [s_f * grad_f], ["x", "p"],
+                                  ["grad_f_x"]),
+        "nlp_jac_g": ca.Function("nlp_jac_g", [z, q], [s * g, ca.mtimes(ca.diag(s), jac)],
+                                 ["x", "p"], ["g", "jac_g_x"]),
+        "nlp_hess_l": ca.Function("nlp_hess_l", [z, q, lam_f, lam], [grad_l, hess],
                                   ["x", "p", "lam_f", "lam_g"],
                                   ["grad_gamma_x", "hess_gamma_x_x"]),
     }
-    return {"x": z, "p": p, "f": fns["f"], "g": g}, functions
+    return {"x": z, "p": q, "f": s_f * fns["f"], "g": s * g}, functions
 
 
 class FatropBackend(Backend):
@@ -143,13 +208,15 @@ class FatropBackend(Backend):
             raise ConfigError(f"solver.backend fatrop needs the NLP as a chain of stages, and "
                               f"this one is not ({err}); use solver.backend: ipopt") from None
         graph, functions = _functions(self.form, nlp.np)
-        #: the bounds fatrop is given (:func:`tightened`)
-        self.bounds = tightened(nlp.bounds_function)
+        #: the bounds fatrop is given, in stage form (:func:`tightened`)
+        self.bounds = tightened(nlp.bounds_function, self.form)
         self.max_iter = int(ipopt.get("max_iter", 3000))
         own = {"print_level": 0, **DEFAULT_FATROP, **ACCEPTABLE_STOP}
         self.jit_compiled = False
         if jit:
             functions, self.jit_compiled = compiled(functions)
+        #: the rows' and the objective's scales at a start (:func:`_scales`)
+        self.scales = _scales(functions, self.form, nlp.np, row_scales(ipopt))
         sf = self.form
         self.options: dict[str, Any]
         self.options = {"structure_detection": "manual", "N": sf.K, "nx": sf.nx, "nu": sf.nu,
@@ -167,18 +234,35 @@ class FatropBackend(Backend):
                               "solver.backend: ipopt") from None
         self._isolated = Isolated(self._solve_here)
         self._call, self._bounds = Buffered(self.solver), Buffered(self.bounds)
+        self._scales = Buffered(self.scales)
         #: the time the build took (stage form, Functions, jit, nlpsol)
         self.build_seconds = time.perf_counter() - t0
 
     def arguments(self, x0: Any, p: Any) -> dict[str, Any]:
         """The solver's inputs in stage form, for an original point x0 and parameters p (numbers,
-        or graphs for the exported solver; every copy starts at its variable)."""
-        sf = self.form
-        bounds: Any = self.bounds(p) if isinstance(p, ca.MX) else self._bounds(p=p).values()
-        lbg, ubg, lbx, ubx = bounds
-        lbz, ubz = sf.bounds_z(lbx, ubx)
-        return {"x0": sf.z_of(x0), "p": p, "lbg": sf.rows_z(lbg), "ubg": sf.rows_z(ubg),
-                "lbx": lbz, "ubx": ubz}
+        or graphs for the exported solver; every copy starts at its variable): its parameters
+        are ``[p; s; s_f]``, with the scales at x0 (:func:`_scales`)."""
+        z0 = self.form.z_of(x0)
+        if isinstance(p, ca.MX):
+            scales = self.scales(z0, p)
+            bounds: Any = self.bounds(p, scales[0])
+            q: Any = ca.vertcat(p, *scales)
+        else:
+            s, s_f = self._scales(x=z0, p=p).values()
+            bounds = self._bounds(p=p, s=s).values()
+            q = np.concatenate([np.ravel(p), s, s_f])
+        lbg, ubg, lbz, ubz = bounds
+        return {"x0": z0, "p": q, "lbg": lbg, "ubg": ubg, "lbx": lbz, "ubx": ubz}
+
+    def unscaled(self, r: dict[str, Any], q: Any) -> dict[str, Any]:
+        """fatrop's result ``r`` on the scaled NLP with parameters ``q`` (:meth:`arguments`) as
+        the original NLP's, in the original variables and rows: ``x, f, g, lam_g, lam_x``.
+        The scaled Lagrangian ``s_f f + (s lam')^T g + lam_x'^T x`` is ``s_f`` times the
+        original's, so ``lam = s lam' / s_f`` and ``lam_x = lam_x' / s_f``."""
+        sf, n = self.form, self.form.order.size
+        s, s_f = q[-n - 1:-1], q[-1]
+        return {"x": sf.x_of(r["x"]), "f": r["f"] / s_f, "g": sf.rows_x(r["g"] / s),
+                "lam_g": sf.rows_x(s * r["lam_g"] / s_f), "lam_x": sf.x_of(r["lam_x"] / s_f)}
 
     def run(self, start: Start) -> Run:
         """Run fatrop from the primal point of ``start`` (its multipliers and listener are
@@ -204,16 +288,15 @@ class FatropBackend(Backend):
     def _solve_here(self, request: tuple[np.ndarray, np.ndarray]) -> Run:
         """The solve itself (run by the helper process)."""
         x0, p = request
-        sf = self.form
         arguments = self.arguments(x0, p)
         t0 = time.perf_counter()
-        r = self._call(**arguments)
+        r = self.unscaled(self._call(**arguments), arguments["p"])
         seconds = time.perf_counter() - t0
         stats = self._call.stats()
         success, iterations = bool(stats["success"]), int(stats["iter_count"])
         status = STATUS.get(int(stats["fatrop"]["return_flag"]), FAILED)
-        return Run(sf.x_of(r["x"]), float(r["f"][0]), sf.rows_x(r["lam_g"]), sf.x_of(r["lam_x"]),
-                   status, success, iterations, seconds)
+        return Run(r["x"], float(r["f"][0]), r["lam_g"], r["lam_x"], status, success,
+                   iterations, seconds)
 
     @cached_property
     def exported_solver(self) -> ca.Function:
@@ -228,7 +311,5 @@ class FatropBackend(Backend):
         """The same solve as a graph in the original variables (the exported solver, which
         runs to the tolerance: :attr:`exported_solver`): ``x, f, g, lam_g, lam_x``; fatrop
         has no dual warm start and starts from x0."""
-        sf = self.form
-        r = self.exported_solver(**self.arguments(x0, p))
-        return {"x": sf.x_of(r["x"]), "f": r["f"], "g": sf.rows_x(r["g"]),
-                "lam_g": sf.rows_x(r["lam_g"]), "lam_x": sf.x_of(r["lam_x"])}
+        arguments = self.arguments(x0, p)
+        return self.unscaled(self.exported_solver(**arguments), arguments["p"])
