@@ -162,6 +162,13 @@ def _scales(functions: dict[str, ca.Function], sf: StageForm, np_: int,
                        ["x", "p"], ["s", "s_f"])
 
 
+def _rows_scaled(jac: ca.MX, s: ca.MX) -> ca.MX:
+    """``diag(s) jac`` as one product per nonzero, in jac's sparsity (a sparse matrix product
+    with the diagonal made the Jacobian's evaluation 1.6 times slower)."""
+    rows, _ = jac.sparsity().get_triplet()
+    return ca.sparsity_cast(jac.nz[:] * s[rows], jac.sparsity())
+
+
 def _functions(sf: StageForm, np_: int) -> tuple[dict[str, Any], dict[str, ca.Function]]:
     """The NLP dict and the five Functions fatrop evaluates, in stage-form order, over the
     parameters ``q = [p; s; s_f]``: the rows multiplied by ``s`` and the objective by ``s_f``
@@ -183,7 +190,7 @@ def _functions(sf: StageForm, np_: int) -> tuple[dict[str, Any], dict[str, ca.Fu
         "nlp_g": ca.Function("nlp_g", [z, q], [s * g], ["x", "p"], ["g"]),
         "nlp_grad_f": ca.Function("nlp_grad_f", [z, q], [s_f * grad_f], ["x", "p"],
                                   ["grad_f_x"]),
-        "nlp_jac_g": ca.Function("nlp_jac_g", [z, q], [s * g, ca.mtimes(ca.diag(s), jac)],
+        "nlp_jac_g": ca.Function("nlp_jac_g", [z, q], [s * g, _rows_scaled(jac, s)],
                                  ["x", "p"], ["g", "jac_g_x"]),
         "nlp_hess_l": ca.Function("nlp_hess_l", [z, q, lam_f, lam], [grad_l, hess],
                                   ["x", "p", "lam_f", "lam_g"],
