@@ -102,9 +102,20 @@ def test_stage_form_is_the_same_nlp_in_stage_order(name: str, scheme: str) -> No
             assert set(stage[cols[rows == r + i]]) <= {k}
         r += sf.ng[k]
     lam = rng.standard_normal(g_z.size)
-    _, hess = nlp.get_function("nlp_hess_l")(z, q, 1.0, lam)
+    hess_l = nlp.get_function("nlp_hess_l")
+    grad_l, hess = hess_l(z, q, 1.0, lam)
     hr, hc = ca.DM(hess).sparsity().get_triplet()
     assert np.array_equal(stage[np.array(hr)], stage[np.array(hc)])
+    # the scaled Lagrangian s_f f + lam^T (s g): its gradient from the scaled f and g, its
+    # Hessian the derivative of that gradient (central differences)
+    grad_f = np.array(nlp.get_function("nlp_grad_f")(z, q)).ravel()
+    np.testing.assert_allclose(np.array(grad_l).ravel(), grad_f + jac.full().T @ lam,
+                               rtol=1e-10, atol=1e-10)
+    d, eps = rng.standard_normal(z.size), 1e-6
+    fd = (np.array(hess_l(z + eps * d, q, 1.0, lam)[0]).ravel()
+          - np.array(hess_l(z - eps * d, q, 1.0, lam)[0]).ravel()) / (2 * eps)
+    np.testing.assert_allclose(ca.DM(hess).full() @ d, fd, rtol=0,
+                               atol=1e-6 * max(1.0, float(np.max(np.abs(fd)))))
 
 
 def test_a_block_reading_a_later_stage_is_refused() -> None:
