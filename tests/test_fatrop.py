@@ -220,6 +220,37 @@ def test_fatrop_reads_the_ipopt_options_it_shares() -> None:
     assert tr.solve(guess, p).iterations <= ipopt.solve(guess, p).iterations
 
 
+@pytest.mark.parametrize("ipopt, message", [
+    ({"nlp_scaling_method": "equilibration-based"}, "gradient-based or none"),
+    ({"nlp_scaling_max_gradient": 0.0}, "nlp_scaling_max_gradient"),
+    ({"nlp_scaling_max_gradient": "10"}, "nlp_scaling_max_gradient"),
+    ({"nlp_scaling_min_value": -1.0}, "nlp_scaling_min_value"),
+])
+def test_fatrop_refuses_a_scaling_it_is_not_given(ipopt: dict, message: str) -> None:
+    """fatrop is given IPOPT's gradient-based scaling or none: another method is a
+    ConfigError saying so, not a silently unscaled solve; a value out of range is refused
+    (by IPOPT, its fallback) with the option's name."""
+    pb = files.build(files.load(ROOT / "problems" / "so3_rest_to_rest.yaml"))
+    with pytest.raises(ConfigError, match=message):
+        compile_problem(pb, 8, ipopt=ipopt, backend="fatrop")
+
+
+def test_fatrop_without_scaling_is_given_unit_scales() -> None:
+    """``nlp_scaling_method: none``: the cart-pole's rows, which its file scales at 10, reach
+    fatrop unscaled (every factor 1)."""
+    cfg = files.load(ROOT / "problems" / "cart_pole.yaml")
+    scales = {}
+    for method in ("gradient-based", "none"):
+        tr = compile_problem(files.build(cfg), 16, ipopt={**cfg.file.solver.ipopt,
+                                                          "nlp_scaling_method": method},
+                             backend="fatrop").transcription
+        p = tr.pack()
+        q = tr.fatrop.arguments(tr.point(tr.guesses(p)[0], p), p)["p"]
+        assert q.size == p.size + tr.fatrop.form.order.size + 1
+        scales[method] = q[p.size:]
+    assert np.any(scales["gradient-based"] < 1) and np.all(scales["none"] == 1.0)
+
+
 # ------------------------------------------------------------------ the rescue in the turn
 
 class Scripted(Backend):

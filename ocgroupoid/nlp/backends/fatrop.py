@@ -116,11 +116,17 @@ def tightened(bounds: ca.Function, sf: StageForm) -> ca.Function:
 def row_scales(options: dict[str, Any]) -> tuple[float, float] | None:
     """IPOPT's gradient-based scaling as fatrop gets it: ``(max_gradient, min_value)`` from the
     shared options (``nlp_scaling_max_gradient``, default 100; ``nlp_scaling_min_value``,
-    default 1e-8), or None where ``nlp_scaling_method`` is not ``gradient-based``. IPOPT's
+    default 1e-8), or None for ``nlp_scaling_method: none``. IPOPT's other methods and its
     target gradients (``nlp_scaling_obj_target_gradient``, ``..._constr_target_gradient``) are
-    IPOPT's alone."""
-    if options.get("nlp_scaling_method", "gradient-based") != "gradient-based":
+    IPOPT's alone: ConfigError for another method. (IPOPT, built beside fatrop as its
+    fallback, refuses values out of range.)"""
+    method = options.get("nlp_scaling_method", "gradient-based")
+    if method == "none":
         return None
+    if method != "gradient-based":
+        raise ConfigError(f"solver.backend fatrop is given IPOPT's gradient-based scaling or "
+                          f"none, not nlp_scaling_method {method!r}; set it to gradient-based "
+                          f"or none, or use solver.backend: ipopt")
     return (float(options.get("nlp_scaling_max_gradient", 100.0)),
             float(options.get("nlp_scaling_min_value", 1e-8)))
 
