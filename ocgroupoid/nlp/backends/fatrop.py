@@ -187,7 +187,7 @@ def _functions(sf: StageForm, np_: int) -> tuple[dict[str, Any], dict[str, ca.Fu
     g = fns["g"][order]
     _, jac = fns["nlp_jac_g"](z, p)
     jac = jac[order, :]
-    f, grad_f = fns["nlp_grad_f"](z, p)
+    _, grad_f = fns["nlp_grad_f"](z, p)
     lam_f, lam = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", sf.order.size)
     # the Lagrangian of the scaled NLP is the original's with scaled multipliers
     grad_l, hess = fns["nlp_hess_l"](z, p, s_f * lam_f, (s * lam)[sf.rank.tolist()])
