@@ -48,9 +48,11 @@ def memory_bytes() -> int:
 
 
 def variables_per_interval(pb: Problem) -> int:
-    """An upper bound of the decision variables per interval over every scheme."""
+    """An upper bound of the decision variables per interval over every scheme (order4 draws
+    bounded recovered controls as lines: two values per control and interval, as controls of
+    their own)."""
     G = pb.groupoid
-    return 2 * G.algebra_dim + G.state_size + 2 * pb.U.numel()
+    return 2 * G.algebra_dim + G.state_size + 2 * max(pb.U.numel(), len(pb.controls))
 
 
 def check_size(pb: Problem, N: int, starts: int, where: str) -> None:

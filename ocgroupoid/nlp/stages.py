@@ -36,6 +36,9 @@ class Stages:
             [ca.substitute(ca.vertcat(*ends), ca.vertcat(problem.q, problem.s, problem.y),
                            ca.vertcat(G.base(s), s, y)) if ends else ca.SX(0, 1)],
             ["s", "y", "P"], ["residual"])
+        #: the controls that are decision variables (the controls of their own), and their
+        #: number
+        self.U: ca.SX = problem.U
         self.n_u = problem.U.numel()
         #: ``estimate(s, y, dy, P, u0) -> u``: the controls declared as variables that best
         #: explain the motion (least squares on the actuated equations, from u0), where a
@@ -68,6 +71,11 @@ class Stages:
         return ca.vertcat(*[c for _, c in pb.constraints]) if pb.constraints else ca.SX(0, 1)
 
     @property
+    def constraint_names(self) -> list[str]:
+        """One name per row of :attr:`constraints`, e.g. ``Phi``."""
+        return [n for n, c in self.problem.constraints for _ in range(c.numel())]
+
+    @property
     def inequalities(self) -> ca.SX:
         """The expressions of every bound, as one column."""
         pb = self.problem
@@ -98,13 +106,13 @@ class Stages:
     def at(self, exprs: list[ca.SX], s: ca.SX, y: ca.SX, dy: ca.SX | None = None,
            u: ca.SX | None = None) -> list[ca.SX]:
         """Expressions of (q, node states, y[, dy][, u]) evaluated at a point with state s
-        (u: the values of the controls declared as variables, :meth:`Problem.control`)."""
+        (u: the values of the controls that are variables, :attr:`U`)."""
         pb, G = self.problem, self.problem.groupoid
         old, new = [pb.q, pb.s, pb.y], [G.base(s), s, y]
         if dy is not None:
             old.append(pb.dy)
             new.append(dy)
-        if u is not None and pb.U.numel():
-            old.append(pb.U)
+        if u is not None and self.n_u:
+            old.append(self.U)
             new.append(u)
         return ca.substitute(exprs, old, new)

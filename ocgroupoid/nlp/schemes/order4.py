@@ -43,6 +43,12 @@ at the ends only (:func:`on_the_line`), and the rows at the Gauss points, implie
 built. quadrotor_min_time at N = 64 has 512 inequality rows instead of 1024, IPOPT 29
 iterations instead of 32 and fatrop 32 instead of 35, at the same optimum.
 
+Recovered controls (an input matrix: ``u = B^-1 EL``) are expressions of the motion, cubic
+on an interval; their bounds hold at :data:`~.gauss.BOUND_POINTS` and read the interval's
+whole motion. Where every bound of a problem bounds such a control, the controls are drawn
+as lines instead (:class:`~ocgroupoid.nlp.control_lines.ControlLines`): variables like
+controls of their own, tied to the recovered ones at the Gauss points, bounded at the ends.
+
 First-order problems: :class:`~ocgroupoid.nlp.schemes.gauss_stages.GaussStages`.
 """
 
@@ -56,6 +62,7 @@ import numpy as np
 from ...errors import ConfigError
 from ...model.problem import Problem
 from ..assembly import Block, Kind
+from ..control_lines import ControlLines, bounded_controls
 from ..layout import Layout
 from .base import DEFAULT_RULE, Pick, Readout, Scheme, columns, stage_function
 from .gauss import (
@@ -85,7 +92,7 @@ def gauss_blocks(scheme: QuadraticGauss | GaussStages, sizes: list[int], idx: np
     ``(L, Phi, H)``; ``split`` maps the stage inputs to the Function's arguments."""
     N, pb = scheme.N, scheme.problem
     npar = pb.P.numel()
-    names = [n for n, c in pb.constraints for _ in range(c.numel())]
+    names = scheme.stages.constraint_names
     times = ((np.arange(N)[:, None] + GAUSS2[None, :]) / N).ravel()
     cols = [f"interval {k}" for k in range(N)]
     call = (lambda *z: scheme.interval(*split(*z))) if split else scheme.interval  # noqa: E731
@@ -106,13 +113,14 @@ def gauss_blocks(scheme: QuadraticGauss | GaussStages, sizes: list[int], idx: np
     return blocks
 
 
-def on_the_line(bounds: ca.SX, pb: Problem) -> bool:
-    """Whether every bound's expression is affine in the controls of their own and depends
-    on nothing else but the parameters: on the line an interval's controls follow, such an
-    expression is a line too, within its bounds wherever it is within them at both ends."""
+def on_the_line(bounds: ca.SX, pb: Problem, U: ca.SX) -> bool:
+    """Whether every bound's expression is affine in the controls that are variables ``U``
+    and depends on nothing else but the parameters: on the line an interval's controls
+    follow, such an expression is a line too, within its bounds wherever it is within them
+    at both ends."""
     motion = ca.vertcat(pb.q, pb.s, pb.y, pb.dy)
-    return bool(pb.U.numel()) and bounds.numel() > 0 and not ca.depends_on(bounds, motion) \
-        and not ca.depends_on(ca.jacobian(bounds, pb.U), pb.U)
+    return bool(U.numel()) and bounds.numel() > 0 and not ca.depends_on(bounds, motion) \
+        and not ca.depends_on(ca.jacobian(bounds, U), U)
 
 
 def check_rule(problem: Problem, rule: str) -> None:
@@ -145,14 +153,18 @@ class QuadraticGauss(Scheme):
         # retraction, so the scheme steps with exp whatever the retraction asked for
         super().__init__(problem, N, "exp", rule)
         check_rule(problem, rule)
+        bounded = bounded_controls(problem)
+        if bounded is not None:
+            self.stages = ControlLines(problem, self.retractions, bounded)
         G, pb = problem.groupoid, problem
         ds, dg, nu = G.state_size, G.algebra_dim, self.stages.n_u
         #: where the bounds hold on an interval (fractions): its ends only when every bound
-        #: is affine in the controls of their own alone (then implied on the whole line
-        #: between them) and no more points were asked for, else :data:`BOUND_POINTS` and
-        #: the ``bound_points`` more
+        #: is affine in the controls that are variables alone (then implied on the whole
+        #: line between them) and no more points were asked for, else :data:`BOUND_POINTS`
+        #: and the ``bound_points`` more
         self.bound_times = np.array([0.0, 1.0]) if bound_points == 0 and \
-            on_the_line(self.stages.inequalities, pb) else bound_times(bound_points)
+            on_the_line(self.stages.inequalities, pb, self.stages.U) \
+            else bound_times(bound_points)
         s = ca.SX.sym("s", ds)
         y0, y1, b = (ca.SX.sym(n, dg) for n in ("y0", "y1", "b"))
         ue = ca.SX.sym("u", 2 * nu)  # controls of their own at the interval's two ends
