@@ -59,10 +59,8 @@ class ControlLines(Stages):
     def __init__(self, problem: Problem, retractions: list[Retraction],
                  bounded: list[int]) -> None:
         super().__init__(problem, retractions)
-        self._names = [n for n, _ in problem.controls]
         self.recovered = ca.vertcat(*[c for _, c in problem.controls])
-        self.U = ca.SX.sym("u_line", len(self._names))
-        self.n_u = len(self._names)
+        self.U = ca.SX.sym("u_line", self.recovered.numel())
         self._bounded = bounded
         G = problem.groupoid
         s, y = ca.SX.sym("s", G.state_size), ca.SX.sym("y", G.algebra_dim)
@@ -82,7 +80,7 @@ class ControlLines(Stages):
 
     @property
     def constraint_names(self) -> list[str]:
-        return super().constraint_names + [f"{n} {TIE}" for n in self._names]
+        return super().constraint_names + [f"{n} {TIE}" for n, _ in self.problem.controls]
 
     @property
     def inequalities(self) -> ca.SX:

@@ -36,10 +36,8 @@ class Stages:
             [ca.substitute(ca.vertcat(*ends), ca.vertcat(problem.q, problem.s, problem.y),
                            ca.vertcat(G.base(s), s, y)) if ends else ca.SX(0, 1)],
             ["s", "y", "P"], ["residual"])
-        #: the controls that are decision variables (the controls of their own), and their
-        #: number
+        #: the controls that are decision variables (the controls of their own)
         self.U: ca.SX = problem.U
-        self.n_u = problem.U.numel()
         #: ``estimate(s, y, dy, P, u0) -> u``: the controls declared as variables that best
         #: explain the motion (least squares on the actuated equations, from u0), where a
         #: scheme carries none (the guesses' controls); None without them
@@ -57,6 +55,11 @@ class Stages:
             self.estimate = ca.Function("control_estimate", [s, y, dy, problem.P, u0],
                                         self.at([u], s, y, dy), ["s", "y", "dy", "P", "u0"],
                                         ["u"])
+
+    @property
+    def n_u(self) -> int:
+        """The number of controls that are decision variables (:attr:`U`)."""
+        return int(self.U.numel())
 
     @property
     def controls(self) -> ca.SX:

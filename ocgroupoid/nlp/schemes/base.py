@@ -103,8 +103,13 @@ class Scheme(ABC):
         self.retraction = retraction_name
         self.retractions: list[Retraction] = [retraction(retraction_name, f.group)
                                               for f in problem.groupoid.factors]
-        self.stages = Stages(problem, self.retractions)
+        self.stages = self.make_stages()
         self.layout: Layout | None = None
+
+    def make_stages(self) -> Stages:
+        """The stage Functions of this scheme's problem and retractions (a scheme may draw
+        some of them otherwise: ``order4``'s lines, :mod:`~ocgroupoid.nlp.control_lines`)."""
+        return Stages(self.problem, self.retractions)
 
     @property
     @abstractmethod

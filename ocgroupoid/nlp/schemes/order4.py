@@ -64,6 +64,7 @@ from ...model.problem import Problem
 from ..assembly import Block, Kind
 from ..control_lines import ControlLines, bounded_controls
 from ..layout import Layout
+from ..stages import Stages
 from .base import DEFAULT_RULE, Pick, Readout, Scheme, columns, stage_function
 from .gauss import (
     GAUSS2,
@@ -153,9 +154,6 @@ class QuadraticGauss(Scheme):
         # retraction, so the scheme steps with exp whatever the retraction asked for
         super().__init__(problem, N, "exp", rule)
         check_rule(problem, rule)
-        bounded = bounded_controls(problem)
-        if bounded is not None:
-            self.stages = ControlLines(problem, self.retractions, bounded)
         G, pb = problem.groupoid, problem
         ds, dg, nu = G.state_size, G.algebra_dim, self.stages.n_u
         #: where the bounds hold on an interval (fractions): its ends only when every bound
@@ -225,6 +223,13 @@ class QuadraticGauss(Scheme):
             self.end_controls = ca.Function("end_controls", args[:4] + args[5:], [ca.vertcat(
                 *[u1 + (u2 - u1) * (c - GAUSS2[0]) / (GAUSS2[1] - GAUSS2[0])
                   for c in (0.0, 1.0)])])
+
+    def make_stages(self) -> Stages:
+        """:class:`ControlLines` where every bound of the problem is on its recovered
+        controls (:func:`bounded_controls`), else the plain stages."""
+        bounded = bounded_controls(self.problem)
+        return super().make_stages() if bounded is None else \
+            ControlLines(self.problem, self.retractions, bounded)
 
     @property
     def n_stage(self) -> int:
