@@ -367,7 +367,7 @@ def test_fatrop_crawling_near_a_solution_is_polished_by_ipopt() -> None:
 
 
 def test_the_first_start_fatrop_fails_on_is_rescued_through_order2() -> None:
-    """The heavy top from the great circle the long way round, N=96: fatrop fails (12
+    """The heavy top from the great circle the long way round, N=96: fatrop fails (11
     iterations), and before IPOPT's fallback fatrop solves order2 from the same start and
     order4 from its solution: verified, in the minimum another start finds directly (the
     natural start finds a higher one), labelled by who solved it."""
@@ -375,7 +375,8 @@ def test_the_first_start_fatrop_fails_on_is_rescued_through_order2() -> None:
     tr = solver.transcription
     p = tr.pack()
     far = next(g for g in solver.guesses(tr, p, True) if g.label == "great circle, long way")
-    assert not tr.fatrop.run(Start(tr.point(far, p), p)).success  # the premise
+    failure = tr.fatrop.run(Start(tr.point(far, p), p))
+    assert not failure.success  # the premise
     sol = solver.solve(guess=far)
     assert sol.success and sol.backend == "fatrop through order2"
     spun = next(g for g in solver.guesses(tr, p, True)
@@ -388,10 +389,11 @@ def test_the_first_start_fatrop_fails_on_is_rescued_through_order2() -> None:
     assert rescue["rescued"] and rescue["scheme"] == "order2" and rescue["backend"] == "fatrop"
     assert rescue["failed"] == "Fatrop_Failed"
     tried, cheap, last = rescue["iterations"]  # fatrop's failure, order2, order4
-    assert tried == 12 and 0 < cheap <= RESCUE_ITERATIONS and last == sol.iterations
+    assert tried == failure.iterations and 0 < cheap <= RESCUE_ITERATIONS
+    assert last == sol.iterations
     assert rescue["message"].startswith("fatrop failed from the start 'great circle, long way' "
-                                        "(Fatrop_Failed after 12 iterations); solved order2 "
-                                        f"on the same grid first in {cheap} iterations")
+                                        f"(Fatrop_Failed after {tried} iterations); solved "
+                                        f"order2 on the same grid first in {cheap} iterations")
     assert "rescue" not in best.diagnostics
 
 

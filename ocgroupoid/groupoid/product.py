@@ -106,6 +106,11 @@ class Groupoid:
         return ca.vertcat(*[f.magnus(ya[vs], yb[vs], H) for f, vs in
                             zip(self.factors, self.velocity_layout.slices)])
 
+    def magnus6(self, y1: Any, y2: Any, y3: Any, H: Any) -> Any:
+        """The sixth-order Magnus step of every factor (:meth:`Factor.magnus6`)."""
+        return ca.vertcat(*[f.magnus6(y1[vs], y2[vs], y3[vs], H) for f, vs in
+                            zip(self.factors, self.velocity_layout.slices)])
+
     def velocity_of_rate(self, retractions: Sequence[Any], theta: Any, rate: Any) -> Any:
         """The product velocity of coordinate rates, factor by factor."""
         return ca.vertcat(*[f.velocity_of_rate(r, theta[vs], rate[vs]) for f, r, vs in
