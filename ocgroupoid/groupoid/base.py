@@ -98,31 +98,33 @@ class Factor(ABC):
         left-trivialised derivative ``d_l tau``)."""
         return ret.dtau_inv_left(theta) @ y if self.side == "right" else ret.dtau_inv(theta) @ y
 
+    def magnus_bracket(self, a: Array, b: Array) -> Array:
+        """The bracket the Magnus expansion of ``dY/dt = A Y`` is written with: ``[a, b]``
+        on left (spatial) factors; ``-[a, b]`` on right (body) ones, whose reconstruction
+        ``dY/dt = Y A`` is that equation in the opposite algebra."""
+        sign = -1.0 if self.side == "right" else 1.0
+        return sign * (self.ad(a) @ b)
+
     def magnus(self, ya: Array, yb: Array, H: Any) -> Array:
         """Exponential coordinates of the step over an interval of length H from the velocities
         ya, yb at its two Gauss points: the fourth-order Magnus step
-        ``H/2 (ya + yb) +- sqrt(3)/12 H^2 [ya, yb]`` (+ for right/body factors, - for
-        left/spatial ones; local error O(H^5); exact on R^n, where the bracket vanishes)."""
-        sign = 1.0 if self.side == "right" else -1.0
-        return H / 2 * (ya + yb) + sign * float(np.sqrt(3.0)) / 12 * H * H * (self.ad(ya) @ yb)
+        ``H/2 (ya + yb) - sqrt(3)/12 H^2 [ya, yb]`` (the bracket of :meth:`magnus_bracket`;
+        local error O(H^5); exact on R^n, where the bracket vanishes)."""
+        return H / 2 * (ya + yb) - float(np.sqrt(3.0)) / 12 * H * H * \
+            self.magnus_bracket(ya, yb)
 
     def magnus6(self, y1: Array, y2: Array, y3: Array, H: Any) -> Array:
         """Exponential coordinates of the step over an interval of length H from the velocities
         y1, y2, y3 at its three Gauss points: the sixth-order Magnus step (Blanes, Casas & Ros
-        2000; Blanes et al., Phys. Rep. 470 (2009), eq. 253), written for ``dY/dt = A Y``
-        with the bracket ``[a, b]``, and for right (body) factors, ``dY/dt = Y A``, with
-        ``-[a, b]``:
+        2000; Blanes et al., Phys. Rep. 470 (2009), eq. 253), with the bracket of
+        :meth:`magnus_bracket`:
 
             a1 = H y2,  a2 = sqrt(15)/3 H (y3 - y1),  a3 = 10/3 H (y3 - 2 y2 + y1),
             C1 = [a1, a2],  C2 = -1/60 [a1, 2 a3 + C1],
             W = a1 + a3/12 + 1/240 [-20 a1 - a3 + C1, a2 + C2]
 
         (local error O(H^7); on R^n, where the brackets vanish, the 3-point Gauss rule)."""
-        sign = 1.0 if self.side == "right" else -1.0
-
-        def bracket(a: Array, b: Array) -> Array:
-            return -sign * (self.ad(a) @ b)
-
+        bracket = self.magnus_bracket
         a1 = H * y2
         a2 = float(np.sqrt(15.0)) / 3 * H * (y3 - y1)
         a3 = 10.0 / 3 * H * (y3 - 2 * y2 + y1)

@@ -18,9 +18,11 @@ is what a plan's landing measures: where the controls drive the velocities exact
 reaction wheels' torques), the replay integrates the same velocity, and what it misses is
 the step's error alone. With the fourth-order step the wheels' plan missed its final
 attitude by 1.2e-7 at N = 32 and 7.4e-9 at N = 64; with this one by 6.9e-12 and 7.4e-14,
-for a Hessian 4-14 % dearer to evaluate and the same iterations (so3 and the custom rigid
-body land 1.7 times closer, ``so3_minimum_time`` 1.2-1.5 times; the quadrotor and the
-heavy top, whose landing the collocation's velocity error dominates, as before). Since
+in the same iterations (so3 and the custom rigid body land 1.7 times closer,
+``so3_minimum_time`` 1.2-1.5 times; the quadrotor and the heavy top, whose landing the
+collocation's velocity error dominates, as before). Its price is in the derivatives: timed in
+pairs with fatrop and JIT at N = 64, the Hessian and the Jacobian took 40-50 % longer and a
+whole solve of a rigid body 1.16-1.3 times as long (docs/explanation/schemes.md). Since
 ``tau(tau^-1(exp W)) = exp W``, the increments are those of any retraction: the scheme steps
 with exp (measured: an RK4 step of ``dTheta/dt = dtau^-1(Theta) y`` in the retraction's
 coordinates gave the same order with stage Hessians several times larger, from its nested
