@@ -4,13 +4,16 @@ starts in turn, the workers option checked, a start that fails in its worker rep
 from __future__ import annotations
 
 import os
+import time
 
+import numpy as np
 import pytest
 
 import ocgroupoid as og
 from ocgroupoid.errors import ConfigError
-from ocgroupoid.nlp.transcription import Transcription
+from ocgroupoid.nlp.transcription import RawResult, Transcription
 from ocgroupoid.solve import parallel
+from ocgroupoid.solve.compiled import START_BUDGET
 from ocgroupoid.systems.heavy_top import heavy_top
 from ocgroupoid.systems.rigid_body import rigid_body
 
@@ -90,8 +93,9 @@ def test_a_further_start_waits_for_the_first_starts_budget() -> None:
     import time
 
     ctx = multiprocessing.get_context("fork")
-    shared = parallel._Shared(ctx.Event(), ctx.RawValue("q", parallel._UNKNOWN), (30, 3),
-                              1e9, os.getppid())  # as a worker sees its parent
+    shared = parallel._Shared(ctx.Event(), ctx.RawValue("q", parallel._UNKNOWN),
+                              ctx.RawValue("d", 1e9), START_BUDGET, 1e9,
+                              os.getppid())  # as a worker sees its parent
     sent: list = []
     conn = type("Conn", (), {"send": lambda self, m: sent.append(m)})()
     waited = [0.0]
@@ -108,6 +112,75 @@ def test_a_further_start_waits_for_the_first_starts_budget() -> None:
     assert not further(1000, 1.0, 0.0)
     shared.stop.set()
     assert first(1, 1.0, 0.0) and further(1, 1.0, 0.0)
+
+
+def _first(iterations: int, seconds: float, success: bool = True) -> RawResult:
+    return RawResult("first", np.zeros(1), np.zeros(0), np.zeros(0), 1.0,
+                     "Solve_Succeeded" if success else "Infeasible_Problem_Detected", success,
+                     iterations, seconds, np.zeros(1))
+
+
+def test_the_budget_follows_the_first_start() -> None:
+    """max(least, times x its iterations), pace x its seconds per iteration over them; no
+    budget after a first start that failed; either limit spends it."""
+    rule = parallel.Rule(least=30, times=3, pace=3.0)
+    budget = parallel.budget_after(_first(22, 0.55), rule)
+    assert budget is not None and budget.iterations == 66
+    assert budget.seconds == pytest.approx(3.0 * 66 * 0.55 / 22)
+    assert parallel.budget_after(_first(4, 0.1), rule).iterations == 30
+    assert parallel.budget_after(_first(0, 0.1), rule).seconds == pytest.approx(9.0)
+    assert parallel.budget_after(_first(22, 0.55, success=False), rule) is None
+    assert not budget.spent(65, 4.9) and budget.spent(66, 0.0) and budget.spent(1, 5.0)
+
+
+def test_a_further_start_in_a_worker_is_stopped_by_its_seconds() -> None:
+    """Past the seconds of its budget a further start stops at its next iteration, the
+    seconds it waited for the first start not counted; with no budget it runs on."""
+    import multiprocessing
+
+    ctx = multiprocessing.get_context("fork")
+    shared = parallel._Shared(ctx.Event(), ctx.RawValue("q", 1000), ctx.RawValue("d", 0.3),
+                              START_BUDGET, 1e9, os.getppid())
+    conn = type("Conn", (), {"send": lambda self, m: None})()
+    waited = [0.0]
+    further = parallel._listener(conn, 1, time.monotonic() + 60, shared, waited)
+    assert not further(1, 1.0, 0.0)
+    time.sleep(0.2)
+    waited[0] = 0.15  # as if it had waited that long at the smallest budget
+    assert not further(2, 1.0, 0.0)
+    time.sleep(0.3)
+    assert further(3, 1.0, 0.0)
+    assert not parallel._listener(conn, 0, time.monotonic() + 60, shared, [0.0])(3, 1.0, 0.0)
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_a_crawling_further_start_is_stopped_by_its_seconds(monkeypatch, tmp_path,
+                                                              workers: int) -> None:
+    """A further start whose iterations take far longer than the first start's (as the
+    heavy top's from the long way round, where MUMPS reallocates) is stopped by the seconds
+    of its budget long before its iterations, in turn and in parallel; the others solve."""
+    solve = Transcription.solve
+    record = tmp_path / "crawled"
+
+    def slow(self, guess, p=None, listener=None, *args, **kwargs):
+        if guess.label != "perturbed 1" or listener is None:
+            return solve(self, guess, p, listener, *args, **kwargs)
+
+        def crawl(iteration: int, objective: float, infeasibility: float) -> bool:
+            time.sleep(0.25)
+            return listener(iteration, objective, infeasibility)
+
+        r = solve(self, guess, p, crawl, *args, **kwargs)
+        record.write_text(f"{r.status} {r.iterations}")  # from a worker too
+        return r
+
+    monkeypatch.setattr(Transcription, "solve", slow)  # the forked workers inherit it
+    sol = og.compile_problem(rigid_body(), N=16, workers=workers).solve(multistart=2)
+    ms = sol.diagnostics["multistart"]
+    assert ms["workers"] == workers and ms["finished"] == ms["starts"] == 4
+    status, iterations = record.read_text().split()
+    assert status == "User_Requested_Stop" and int(iterations) < START_BUDGET.least
+    assert sol.success and sol.discretization["start"] != "perturbed 1"
 
 
 def test_ctrl_c_stops_the_workers_with_the_best_point_so_far() -> None:

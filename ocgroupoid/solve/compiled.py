@@ -41,9 +41,10 @@ from .readout import control_ppoly, make_solution
 from .solution import Solution
 
 Progress = Callable[[str], None]
-#: a further start of a multi-start gets max(a, b x the first start's) iterations: one that
+#: a further start of a multi-start gets max(30, 3 x the first start's) iterations, at no more
+#: than 3 times its seconds per iteration (:class:`~ocgroupoid.solve.parallel.Rule`): one that
 #: needs far more is on its way to a worse minimum or nowhere (it is stopped, not counted)
-START_BUDGET = (30, 3)
+START_BUDGET = parallel.Rule(least=30, times=3, pace=3.0)
 PROGRESS_EVERY = 0.25  # seconds between two reports of IPOPT's iterations
 #: the iterations each run of fatrop's rescue (:meth:`CompiledProblem._through`) has: the
 #: heavy top from the long way round needs 34-35 of order2's and 4-5 of order4's after them at
@@ -58,20 +59,22 @@ def _noop(_: str) -> None:
     return None
 
 
-def _listener(where: str, progress: Progress, interrupt: Interrupt, budget: int | None,
-              deadline: float) -> Listener:
+def _listener(where: str, progress: Progress, interrupt: Interrupt,
+              budget: parallel.Budget | None, deadline: float) -> Listener:
     """IPOPT's iteration callback: progress (iteration, objective, infeasibility) at most
-    every :data:`PROGRESS_EVERY` seconds; a stop once Ctrl-C was pressed, after ``budget``
-    iterations, or past ``deadline`` (``time.monotonic()``)."""
+    every :data:`PROGRESS_EVERY` seconds; a stop once Ctrl-C was pressed, once ``budget``
+    (iterations or seconds since the listener was made) is spent, or past ``deadline``
+    (``time.monotonic()``)."""
     last = [time.perf_counter()]
+    began = last[0]
 
     def listen(iteration: int, objective: float, infeasibility: float) -> bool:
         now = time.perf_counter()
         if now - last[0] >= PROGRESS_EVERY:
             last[0] = now
             progress(parallel.iteration_line(where, iteration, objective, infeasibility))
-        return interrupt.requested or (budget is not None and iteration >= budget) or \
-            time.monotonic() > deadline
+        return interrupt.requested or time.monotonic() > deadline or \
+            (budget is not None and budget.spent(iteration, now - began))
 
     return listen
 
@@ -171,7 +174,7 @@ class CompiledProblem:
         :mod:`~ocgroupoid.verify.verdict` (IPOPT converged and the solution checked out).
 
         ``multistart``: True (every geodesic guess, the model's guesses and 3 perturbations;
-        a further start gets :data:`START_BUDGET` iterations; the default of problem files
+        a further start gets the budget :data:`START_BUDGET`; the default of problem files
         and the CLI), False (the first geodesic only; the default of the options, which the
         exported C solver shares) or the number of perturbed starts; the starts run on
         ``options.workers`` processes (:mod:`~ocgroupoid.solve.parallel`). ``continuation``:
@@ -392,7 +395,7 @@ class CompiledProblem:
                 rescue: Rescue | None = None) -> tuple[list[RawResult], dict[str, Any]]:
         """The starts of one grid, in order, on worker processes (``options.workers``,
         :mod:`~ocgroupoid.solve.parallel`) or in turn, each after the first with
-        :data:`START_BUDGET` iterations; none started after Ctrl-C or the deadline. The
+        the budget :data:`START_BUDGET`; none started after Ctrl-C or the deadline. The
         first, which has no budget, has ``rescue`` between fatrop's failure and IPOPT's
         fallback (:meth:`_through`); the others' fallback is bounded by their budget. With
         ``diagnostics["multistart"]``: the starts asked for and finished, the workers, the
@@ -409,7 +412,7 @@ class CompiledProblem:
                                          deadline, START_BUDGET, PROGRESS_EVERY, rescue)
         else:
             level = []
-            budget: int | None = None  # iterations of a further start
+            budget: parallel.Budget | None = None  # of a further start
             for i, g in enumerate(starts):
                 progress(where(i))
                 r = tr.solve(g, p, _listener(where(i), progress, interrupt, budget, deadline),

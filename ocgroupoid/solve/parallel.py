@@ -22,14 +22,16 @@ reported in it, whatever order they finish in. The iteration budget of a further
 iterations) is kept exactly: a further start that reaches the smallest budget before the first
 start has finished waits for it, then goes on or stops at the same iteration as it would have
 in turn. So every start runs the same iterations from the same point, and the best start,
-the distinct minima and the verdict are the sequential path's.
+the distinct minima and the verdict are the sequential path's. The one exception is a further
+start that crawls: its seconds are bounded too (:class:`Budget`), and where a clock stops a
+start depends on the machine's load, in turn as in parallel.
 
 **No early stop.** Nothing stops a running start because another one did well: IPOPT's
 iterates of a nonconvex NLP give no lower bound on the cost a start will end at (an
 infeasible iterate's objective says nothing, and the objective of a feasible one may still
 fall below any other start's), and a local solver never certifies a minimum as the best. A
 criterion that stopped starts early could drop the best minimum, so there is none; the
-iteration budget is the only limit, as in turn.
+budget is the only limit, as in turn.
 
 **Ctrl-C, the deadline and failures.** The workers ignore SIGINT; the solving process, which
 catches it (:mod:`~ocgroupoid.solve.interrupt`), or its deadline sets a stop event that every
@@ -69,10 +71,42 @@ POLL = 0.05
 GRACE = 5.0
 
 
-def budget_after(first: RawResult, rule: tuple[int, int]) -> int | None:
-    """The iterations a further start gets once the first start has ended: ``rule = (a, b)``,
-    max(a, b x its iterations) when it solved, no limit (None) when it failed."""
-    return max(rule[0], rule[1] * first.iterations) if first.success else None
+@dataclass(frozen=True)
+class Rule:
+    """How a further start's budget follows from the first start: ``least`` iterations at
+    least, ``times`` its iterations, and ``pace`` times its seconds per iteration over them.
+
+    The seconds catch a start that crawls: the heavy top with rotors from the long way round
+    (order4, N = 128) diverges with IPOPT's regularisation at 1e10 and MUMPS reallocating, at
+    about 1 s an iteration against the first start's 27 ms; its 66 iterations took 69 s where
+    the eight other starts took 7 s together."""
+
+    least: int
+    times: int
+    pace: float
+
+
+@dataclass(frozen=True)
+class Budget:
+    """What a further start may spend: iterations, and seconds of its own solve."""
+
+    iterations: int
+    seconds: float
+
+    def spent(self, iteration: int, seconds: float) -> bool:
+        """Whether a start at ``iteration`` after ``seconds`` has used its budget."""
+        return iteration >= self.iterations or seconds >= self.seconds
+
+
+def budget_after(first: RawResult, rule: Rule) -> Budget | None:
+    """A further start's budget once the first start has ended (no limit, None, when it
+    failed): max(least, times x its iterations), and pace x its seconds per iteration over
+    them."""
+    if not first.success:
+        return None
+    iterations = max(rule.least, rule.times * first.iterations)
+    return Budget(iterations, rule.pace * iterations * first.solve_seconds
+                  / max(first.iterations, 1))
 
 
 def timed(r: RawResult, deadline: float) -> RawResult:
@@ -116,13 +150,14 @@ def plan(workers: int | None, starts: int) -> tuple[int, str]:
 
 @dataclass(frozen=True)
 class _Shared:
-    """What every worker reads: the stop event, the further starts' budget (shared int), the
-    budget rule (minimum, multiple of the first start's iterations), the seconds between two
-    progress messages and the solving process's pid (a worker whose parent is gone ends)."""
+    """What every worker reads: the stop event, the further starts' budget (iterations and
+    seconds, shared numbers), the budget rule, the seconds between two progress messages and
+    the solving process's pid (a worker whose parent is gone ends)."""
 
     stop: Any
     budget: Any
-    rule: tuple[int, int]
+    seconds: Any
+    rule: Rule
     every: float
     parent: int
 
@@ -134,6 +169,7 @@ def _listener(conn: Connection, i: int, deadline: float, shared: _Shared,
     further start, waiting at the smallest budget until the first start has set it (the
     seconds waited added to ``waited[0]``: not the start's solver time)."""
     last = [time.perf_counter()]
+    began = last[0]
 
     def stopped() -> bool:
         return shared.stop.is_set() or time.monotonic() > deadline or \
@@ -146,18 +182,23 @@ def _listener(conn: Connection, i: int, deadline: float, shared: _Shared,
             conn.send(("progress", i, (iteration, objective, infeasibility)))
         if stopped():
             return True
-        if i == 0 or iteration < shared.rule[0]:
+        if i == 0:
             return False
-        t0 = time.perf_counter()
-        try:
-            while shared.budget.value == _UNKNOWN:  # the first start is still running
-                time.sleep(POLL / 10)
-                if stopped():
-                    return True
-        finally:
-            waited[0] += time.perf_counter() - t0
-        budget = shared.budget.value
-        return budget != _UNLIMITED and iteration >= budget
+        if shared.budget.value == _UNKNOWN:  # the first start is still running
+            if iteration < shared.rule.least:
+                return False
+            t0 = time.perf_counter()
+            try:
+                while shared.budget.value == _UNKNOWN:
+                    time.sleep(POLL / 10)
+                    if stopped():
+                        return True
+            finally:
+                waited[0] += time.perf_counter() - t0
+        if shared.budget.value == _UNLIMITED:
+            return False
+        return Budget(shared.budget.value, shared.seconds.value).spent(
+            iteration, time.perf_counter() - began - waited[0])
 
     return listen
 
@@ -194,19 +235,20 @@ def _failed(tr: Transcription, guess: Guess, p: np.ndarray, why: str) -> RawResu
 
 def run(tr: Transcription, starts: Sequence[Guess], p: np.ndarray, workers: int,
         where: Callable[[int], str], progress: Callable[[str], None], interrupt: Interrupt,
-        deadline: float, rule: tuple[int, int], every: float, rescue: Rescue | None = None
+        deadline: float, rule: Rule, every: float, rescue: Rescue | None = None
         ) -> tuple[list[RawResult], list[dict[str, Any]]]:
     """Solve ``starts`` on ``workers`` forked processes (module docstring): the results of
     the starts that ran, in their order, and the starts that failed in a worker (number from
     1, label, error). ``where(i)`` names start i for ``progress``, which hears each start as
     it is handed out and as it finishes, and the workers' iterations; ``rule`` is the
-    further starts' iteration budget, ``every`` the seconds between two progress messages
+    further starts' budget, ``every`` the seconds between two progress messages
     of a start."""
     ctx = mp.get_context("fork")
     for backend in tr.backends:  # IPOPT's instance with the iteration callback, built once
         if isinstance(backend, IpoptBackend):  # here for every worker (else in each)
             backend.watched_solver  # noqa: B018
-    shared = _Shared(ctx.Event(), ctx.RawValue("q", _UNKNOWN), rule, every, os.getpid())
+    shared = _Shared(ctx.Event(), ctx.RawValue("q", _UNKNOWN), ctx.RawValue("d", 0.0), rule,
+                     every, os.getpid())
     conns: list[Connection] = []
     procs: list[Any] = []
     failed: list[dict[str, Any]] = []
@@ -290,11 +332,13 @@ def _receive(w: int, conn: Connection, proc: Any, running: dict[int, int],
 
 
 def _settle(shared: _Shared, i: int, r: RawResult | None) -> None:
-    """Once the first start has ended: the further starts' budget, a multiple of its
-    iterations when it solved (none when it failed), as in turn."""
+    """Once the first start has ended: the further starts' budget (:func:`budget_after`;
+    none when it failed), as in turn."""
     if i == 0:
         budget = None if r is None else budget_after(r, shared.rule)
-        shared.budget.value = _UNLIMITED if budget is None else budget
+        if budget is not None:
+            shared.seconds.value = budget.seconds  # before the iterations, which workers poll
+        shared.budget.value = _UNLIMITED if budget is None else budget.iterations
 
 
 def _stop(shared: _Shared, conns: list[Connection], procs: list[Any]) -> None:
