@@ -62,7 +62,8 @@ def test_the_bound_holds_on_the_whole_interval() -> None:
 def test_lines_keep_order_four() -> None:
     """A smooth slew with a bound that stays inactive (|u| <= 10) is drawn with lines; its
     cost converges at order 4 to the recovered formulation's limit (measured against N =
-    256: orders 3.95, 3.99, 4.00 from N = 8 to 64; the two limits agree to 2e-11)."""
+    128: orders 3.94 and 3.99 from N = 8 to 32; against N = 256, 3.95, 3.99 and 4.00 from N = 8
+    to 64, and the two limits agree to 2e-11)."""
     name = "so3_rest_to_rest"
     costs = {}
     for N in (8, 16, 32, 128):
