@@ -121,14 +121,15 @@ def _first(iterations: int, seconds: float, success: bool = True) -> RawResult:
 
 
 def test_the_budget_follows_the_first_start() -> None:
-    """max(least, times x its iterations), pace x its seconds per iteration over them; no
-    budget after a first start that failed; either limit spends it."""
-    rule = parallel.Rule(least=30, times=3, pace=3.0)
+    """max(least, times x its iterations), pace x its seconds per iteration over them but at
+    least least_seconds; no budget after a first start that failed; either limit spends it."""
+    rule = parallel.Rule(least=30, times=3, pace=3.0, least_seconds=1.0)
     budget = parallel.budget_after(_first(22, 0.55), rule)
     assert budget is not None and budget.iterations == 66
     assert budget.seconds == pytest.approx(3.0 * 66 * 0.55 / 22)
     assert parallel.budget_after(_first(4, 0.1), rule).iterations == 30
     assert parallel.budget_after(_first(0, 0.1), rule).seconds == pytest.approx(9.0)
+    assert parallel.budget_after(_first(34, 0.01), rule).seconds == 1.0  # the floor
     assert parallel.budget_after(_first(22, 0.55, success=False), rule) is None
     assert not budget.spent(65, 4.9) and budget.spent(66, 0.0) and budget.spent(1, 5.0)
 

@@ -41,10 +41,11 @@ from .readout import control_ppoly, make_solution
 from .solution import Solution
 
 Progress = Callable[[str], None]
-#: a further start of a multi-start gets max(30, 3 x the first start's) iterations, at no more
-#: than 3 times its seconds per iteration (:class:`~ocgroupoid.solve.parallel.Rule`): one that
-#: needs far more is on its way to a worse minimum or nowhere (it is stopped, not counted)
-START_BUDGET = parallel.Rule(least=30, times=3, pace=3.0)
+#: a further start of a multi-start gets max(30, 3 x the first start's) iterations, at no
+#: more than 3 times its seconds per iteration but at least 1 s in all
+#: (:class:`~ocgroupoid.solve.parallel.Rule`): one that needs far more is on its way to a
+#: worse minimum or nowhere (it is stopped, not counted)
+START_BUDGET = parallel.Rule(least=30, times=3, pace=3.0, least_seconds=1.0)
 PROGRESS_EVERY = 0.25  # seconds between two reports of IPOPT's iterations
 #: the iterations each run of fatrop's rescue (:meth:`CompiledProblem._through`) has: the
 #: heavy top from the long way round needs 34-35 of order2's and 4-5 of order4's after them at

@@ -74,16 +74,20 @@ GRACE = 5.0
 @dataclass(frozen=True)
 class Rule:
     """How a further start's budget follows from the first start: ``least`` iterations at
-    least, ``times`` its iterations, and ``pace`` times its seconds per iteration over them.
+    least, ``times`` its iterations, and ``pace`` times its seconds per iteration over them,
+    but never less than ``least_seconds``.
 
     The seconds catch a start that crawls: the heavy top with rotors from the long way round
     (order4, N = 128) diverges with IPOPT's regularisation at 1e10 and MUMPS reallocating, at
     about 1 s an iteration against the first start's 27 ms; its 66 iterations took 69 s where
-    the eight other starts took 7 s together."""
+    the eight other starts took 7 s together. Their floor keeps a start's fixed costs (a
+    fatrop helper's, a fallback's) from stopping a quick start: the plate-ball's long way round
+    (first-order rule, N = 16, fatrop) took 0.08 s where its first start's pace gave it 0.09 s."""
 
     least: int
     times: int
     pace: float
+    least_seconds: float
 
 
 @dataclass(frozen=True)
@@ -101,12 +105,12 @@ class Budget:
 def budget_after(first: RawResult, rule: Rule) -> Budget | None:
     """A further start's budget once the first start has ended (no limit, None, when it
     failed): max(least, times x its iterations), and pace x its seconds per iteration over
-    them."""
+    them, at least least_seconds."""
     if not first.success:
         return None
     iterations = max(rule.least, rule.times * first.iterations)
-    return Budget(iterations, rule.pace * iterations * first.solve_seconds
-                  / max(first.iterations, 1))
+    return Budget(iterations, max(rule.least_seconds, rule.pace * iterations
+                                  * first.solve_seconds / max(first.iterations, 1)))
 
 
 def timed(r: RawResult, deadline: float) -> RawResult:
