@@ -184,6 +184,36 @@ def test_a_crawling_further_start_is_stopped_by_its_seconds(monkeypatch, tmp_pat
     assert sol.success and sol.discretization["start"] != "perturbed 1"
 
 
+@pytest.mark.parametrize("workers", [1, 2])
+def test_fatrops_stop_reads_the_seconds_of_a_further_start(monkeypatch, tmp_path,
+                                                           workers: int) -> None:
+    """fatrop's helper has no iteration callback; the ``stop()`` it polls is true once a
+    further start has spent its seconds (here a budget of microseconds), never for the
+    first start, in turn and in parallel."""
+    from ocgroupoid.solve import compiled
+
+    monkeypatch.setattr(compiled, "START_BUDGET", parallel.Rule(least=1000, times=1000,
+                                                                pace=1e-6, least_seconds=0.0))
+    solve = Transcription.solve
+
+    def spy(self, guess, p=None, listener=None, deadline=None, stop=None, *args, **kwargs):
+        # the first start ("geodesic") waits a little; the others until their stop() is true
+        # (the budget is known once the first start has ended), or 10 s
+        end = time.monotonic() + (0.3 if guess.label == "geodesic" else 10.0)
+        while not stop() and time.monotonic() < end:
+            time.sleep(0.01)
+        with open(tmp_path / "stops", "a") as out:
+            out.write(f"{guess.label}\t{stop()}\n")
+        return solve(self, guess, p, listener, deadline, stop, *args, **kwargs)
+
+    monkeypatch.setattr(Transcription, "solve", spy)
+    sol = og.compile_problem(rigid_body(), N=16, workers=workers).solve(multistart=2)
+    stops = dict(line.split("\t") for line in (tmp_path / "stops").read_text().splitlines())
+    assert len(stops) == 4 and stops.pop("geodesic") == "False"
+    assert sol.discretization["start"] == "geodesic"  # the others stopped by their budget
+    assert set(stops.values()) == {"True"}
+
+
 def test_ctrl_c_stops_the_workers_with_the_best_point_so_far() -> None:
     """SIGINT to the solving process: the workers stop at their next iteration and end,
     the starts not handed out are skipped, status interrupted."""

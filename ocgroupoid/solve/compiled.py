@@ -80,6 +80,14 @@ def _listener(where: str, progress: Progress, interrupt: Interrupt,
     return listen
 
 
+def _over(interrupt: Interrupt, budget: parallel.Budget | None) -> Callable[[], bool]:
+    """Whether a run should stop for fatrop's helper, which has no iteration callback: Ctrl-C
+    was pressed, or the seconds of a further start's ``budget`` (from now) are spent."""
+    began = time.perf_counter()
+    return lambda: interrupt.requested or \
+        (budget is not None and time.perf_counter() - began >= budget.seconds)
+
+
 @dataclass
 class Minimum:
     """A distinct local minimum met by multi-start."""
@@ -417,8 +425,7 @@ class CompiledProblem:
             for i, g in enumerate(starts):
                 progress(where(i))
                 r = tr.solve(g, p, _listener(where(i), progress, interrupt, budget, deadline),
-                             deadline, lambda: interrupt.requested,
-                             rescue if i == 0 else None)
+                             deadline, _over(interrupt, budget), rescue if i == 0 else None)
                 level.append(parallel.timed(r, deadline))
                 if interrupt.requested or time.monotonic() > deadline:
                     break

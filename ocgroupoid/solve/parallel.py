@@ -166,6 +166,20 @@ class _Shared:
     parent: int
 
 
+def _over(i: int, shared: _Shared, began: float, waited: list[float]) -> Callable[[], bool]:
+    """Whether start i's run should stop for fatrop's helper (which has no iteration
+    callback): the stop event, or the seconds of a further start's budget spent (the seconds
+    it waited at the smallest budget not counted)."""
+    def over() -> bool:
+        if shared.stop.is_set():
+            return True
+        if i == 0 or shared.budget.value in (_UNKNOWN, _UNLIMITED):
+            return False
+        return time.perf_counter() - began - waited[0] >= shared.seconds.value
+
+    return over
+
+
 def _listener(conn: Connection, i: int, deadline: float, shared: _Shared,
               waited: list[float]) -> Callable[[int, float, float], bool]:
     """A worker's iteration callback: progress to the solving process at most every
@@ -224,7 +238,8 @@ def _serve(conn: Connection, tr: Transcription, shared: _Shared,
         waited = [0.0]
         try:
             r = tr.solve(guess, p, _listener(conn, i, deadline, shared, waited), deadline,
-                         shared.stop.is_set, rescue if i == 0 else None)
+                         _over(i, shared, time.perf_counter(), waited),
+                         rescue if i == 0 else None)
             conn.send(("done", i, replace(r, solve_seconds=r.solve_seconds - waited[0])))
         except Exception as err:  # noqa: BLE001  (reported as a failed start)
             conn.send(("error", i, f"{type(err).__name__}: {err}"))
