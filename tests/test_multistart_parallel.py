@@ -181,6 +181,7 @@ def test_a_crawling_further_start_is_stopped_by_its_seconds(monkeypatch, tmp_pat
     assert ms["workers"] == workers and ms["finished"] == ms["starts"] == 4
     status, iterations = record.read_text().split()
     assert status == "User_Requested_Stop" and int(iterations) < START_BUDGET.least
+    assert ms["budget_spent"] == ["perturbed 1"]  # reported as such, not as Ctrl-C
     assert sol.success and sol.discretization["start"] != "perturbed 1"
 
 
@@ -212,6 +213,7 @@ def test_fatrops_stop_reads_the_seconds_of_a_further_start(monkeypatch, tmp_path
     assert len(stops) == 4 and stops.pop("geodesic") == "False"
     assert sol.discretization["start"] == "geodesic"  # the others stopped by their budget
     assert set(stops.values()) == {"True"}
+    assert sorted(sol.diagnostics["multistart"]["budget_spent"]) == sorted(stops)
 
 
 def test_ctrl_c_stops_the_workers_with_the_best_point_so_far() -> None:
@@ -226,6 +228,7 @@ def test_ctrl_c_stops_the_workers_with_the_best_point_so_far() -> None:
         sol = solver.solve(multistart=12)
     assert sol.status == "interrupted" and not sol.success
     assert sol.starts < sol.diagnostics["multistart"]["starts"]
+    assert "budget_spent" not in sol.diagnostics["multistart"]  # Ctrl-C stopped them
     assert not multiprocessing.active_children()  # the workers are gone
     assert signal.getsignal(signal.SIGINT) is before
 

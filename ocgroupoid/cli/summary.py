@@ -40,7 +40,10 @@ def summary(sol: Any) -> Table:
                   f"{m['sequential_seconds']:.2f} s summed over the starts, best start "
                   f"{m['best_start_seconds']:.2f} s" + (f"; {len(m['failed'])} failed in "
                                                           "their worker" if m.get("failed")
-                                                          else ""))
+                                                          else "")
+                  + (f"; {len(m['budget_spent'])} stopped by "
+                     f"{'its' if len(m['budget_spent']) == 1 else 'their'} budget"
+                     if m.get("budget_spent") else ""))
     t.add_row("EL residual (max over nodes)", f"{d['euler_lagrange_residual_max']:.2e}"
               if "euler_lagrange_residual_max" in d else "none: the scheme is not variational")
     t.add_row("distance from manifold",

@@ -408,7 +408,8 @@ class CompiledProblem:
         first, which has no budget, has ``rescue`` between fatrop's failure and IPOPT's
         fallback (:meth:`_through`); the others' fallback is bounded by their budget. With
         ``diagnostics["multistart"]``: the starts asked for and finished, the workers, the
-        wall time of all, the sum of their solver times, and the best start's."""
+        wall time of all, the sum of their solver times, the best start's, and the starts
+        their budget stopped (status :data:`~ocgroupoid.solve.parallel.BUDGET_SPENT`)."""
         t0 = time.perf_counter()
         workers, why = parallel.plan(self.options.workers, len(starts))
 
@@ -426,6 +427,8 @@ class CompiledProblem:
                 progress(where(i))
                 r = tr.solve(g, p, _listener(where(i), progress, interrupt, budget, deadline),
                              deadline, _over(interrupt, budget), rescue if i == 0 else None)
+                if i > 0:
+                    r = parallel.budgeted(r, deadline, interrupt.requested)
                 level.append(parallel.timed(r, deadline))
                 if interrupt.requested or time.monotonic() > deadline:
                     break
@@ -437,8 +440,10 @@ class CompiledProblem:
         report = {"starts": len(starts), "finished": len(level), "workers": workers,
                   "wall_seconds": time.perf_counter() - t0, "sequential_seconds": spent,
                   "best_start_seconds": best.solve_seconds}
+        spent_budget = [r.label for r in level if r.status == parallel.BUDGET_SPENT]
         return level, {**report, **({"note": why} if why else {}),
-                       **({"failed": failed} if failed else {})}
+                       **({"failed": failed} if failed else {}),
+                       **({"budget_spent": spent_budget} if spent_budget else {})}
 
     def _bridge(self, prev: tuple[Transcription, RawResult], n: int, landed: RawResult,
                 params: dict[str, Any] | None, initial: dict[str, Any] | None,

@@ -55,7 +55,7 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from ..nlp.backends import TIMED_OUT, IpoptBackend
+from ..nlp.backends import INTERRUPTED, TIMED_OUT, IpoptBackend
 from ..nlp.backends.policy import Rescue
 from ..nlp.program import Guess
 from ..nlp.transcription import RawResult, Transcription
@@ -63,6 +63,8 @@ from .interrupt import Interrupt
 
 #: the status of a start that raised in its worker process or lost it
 WORKER_FAILED = "Worker_Failed"
+#: the status of a further start stopped by its :class:`Budget`
+BUDGET_SPENT = "Start_Budget_Spent"
 #: a further start's budget before the first start has finished, and when it has none
 _UNKNOWN, _UNLIMITED = -2, -1
 #: seconds between two looks at Ctrl-C, the deadline and the workers
@@ -111,6 +113,16 @@ def budget_after(first: RawResult, rule: Rule) -> Budget | None:
     iterations = max(rule.least, rule.times * first.iterations)
     return Budget(iterations, max(rule.least_seconds, rule.pace * iterations
                                   * first.solve_seconds / max(first.iterations, 1)))
+
+
+def budgeted(r: RawResult, deadline: float, stopped: bool) -> RawResult:
+    """A further start's ``r``, its status :data:`BUDGET_SPENT` when its run was stopped (by
+    IPOPT's listener or fatrop's ``stop()``) and neither by the deadline nor, ``stopped``, by
+    Ctrl-C or the stop event: then its budget stopped it."""
+    if not r.success and r.status in ("User_Requested_Stop", INTERRUPTED) and not stopped \
+            and time.monotonic() <= deadline:
+        return replace(r, status=BUDGET_SPENT)
+    return r
 
 
 def timed(r: RawResult, deadline: float) -> RawResult:
@@ -240,6 +252,8 @@ def _serve(conn: Connection, tr: Transcription, shared: _Shared,
             r = tr.solve(guess, p, _listener(conn, i, deadline, shared, waited), deadline,
                          _over(i, shared, time.perf_counter(), waited),
                          rescue if i == 0 else None)
+            if i > 0:
+                r = budgeted(r, deadline, shared.stop.is_set())
             conn.send(("done", i, replace(r, solve_seconds=r.solve_seconds - waited[0])))
         except Exception as err:  # noqa: BLE001  (reported as a failed start)
             conn.send(("error", i, f"{type(err).__name__}: {err}"))
