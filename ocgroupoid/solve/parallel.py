@@ -81,7 +81,7 @@ class Rule:
 
     The seconds catch a start that crawls: the heavy top with rotors from the long way round
     (order4, N = 128) diverges with IPOPT's regularisation at 1e10 and MUMPS reallocating, at
-    about 1 s an iteration against the first start's 27 ms; its 66 iterations took 69 s where
+    about 1 s an iteration against the first start's 24-27 ms; its 66 iterations took 69 s where
     the eight other starts took 7 s together. Their floor keeps a start's fixed costs (a
     fatrop helper's, a fallback's) from stopping a quick start: the plate-ball's long way round
     (first-order rule, N = 16, fatrop) took 0.08 s where its first start's pace gave it 0.09 s."""
