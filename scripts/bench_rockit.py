@@ -188,7 +188,7 @@ def main() -> None:
     cfg = files.load(FILE)
     problem = files.build(cfg)
     f = cfg.file
-    setting = Setting(dict(f.solver.ipopt), f.discretization.rule, f.discretization.steps)
+    setting = Setting.of(f)
     tr = compile_problem(problem, 8).transcription  # the instance's numbers, as bench_mpc
     p = tr.pack()
     T = tr.horizon_of(p)

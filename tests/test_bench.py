@@ -180,3 +180,24 @@ def test_median_seconds_times_every_call_and_keeps_the_last_result() -> None:
     seconds, last = median_seconds(lambda: calls.append(1) or len(calls), 3)
     assert last == 3 and seconds >= 0.0
     assert median_seconds(lambda: "once", 0)[1] == "once"  # at least one call
+
+
+@pytest.mark.parametrize("backend", ["ipopt", "fatrop"])
+def test_a_timed_solve_is_held_to_max_seconds_and_a_failed_one_is_not_repeated(
+        backend: str) -> None:
+    """The file's ``solver.max_seconds`` bounds every run of a work-precision row (a start
+    that diverges slowly once took 20 minutes a row, its repeats included); a run that fails
+    is run once, while a successful one is repeated."""
+    import dataclasses
+
+    from ocgroupoid.bench.methods import Method
+    from ocgroupoid.bench.timing import Setting, timed_solve
+    assert Setting.of(files.load(SO3, ["solver.max_seconds=42"]).file).max_seconds == 42.0
+    cfg = files.load(SO3)
+    problem, setting = files.build(cfg), Setting.of(cfg.file)
+    method = Method("order4", backend=backend)
+    stopped = timed_solve(problem, method, 256, dataclasses.replace(setting, max_seconds=1e-3),
+                          repeats=3)
+    assert stopped.solution.status == "Maximum_WallTime_Exceeded" and len(stopped.seconds) == 1
+    solved = timed_solve(problem, method, 256, setting, repeats=3)
+    assert solved.solution.status == "Solve_Succeeded" and len(solved.seconds) >= 3

@@ -63,7 +63,9 @@ def work_precision_command(
 
     Median IPOPT time, iterations, relative cost error against a reference and replay
     terminal error for every method and N: a JSONL row per solve as it goes, a summary JSON
-    (with the time ratios at equal accuracy) and a log-log work-precision chart."""
+    (with the time ratios at equal accuracy) and a log-log work-precision chart. Each run
+    is held to the file's solver.max_seconds (e.g. --set solver.max_seconds=20 for a start
+    that diverges slowly); an unsuccessful run is not repeated."""
     from ..errors import ConfigError
     from ..progress import progress_bar
     from ..solve.outputs import check_folder

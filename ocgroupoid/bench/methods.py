@@ -18,7 +18,7 @@ from ..lie.retraction import RETRACTION_NAMES
 from ..lie.rn import Rn
 from ..model.problem import Problem
 from ..nlp.method import DEFAULT_RETRACTION, Method as Discretisation
-from ..nlp.options import BACKENDS, DEFAULT_BACKEND, SolverOptions
+from ..nlp.options import BACKENDS, DEFAULT_BACKEND, MAX_SECONDS, SolverOptions
 from ..nlp.schemes import BASELINES, DEFAULT_RULE, SCHEME_NAMES
 from ..nlp.schemes.coordinates import coordinates
 
@@ -62,9 +62,11 @@ class Method:
         return Discretisation(N, scheme=self.scheme, retraction=self.retraction,
                               rule=self.rule(file_rule), steps=steps)
 
-    def options(self, ipopt: dict[str, Any]) -> SolverOptions:
-        """The solver options of this method: its backend and jit, IPOPT's ``ipopt``."""
-        return SolverOptions(backend=self.backend, ipopt=dict(ipopt), jit=self.jit)
+    def options(self, ipopt: dict[str, Any], max_seconds: float = MAX_SECONDS) -> SolverOptions:
+        """The solver options of this method: its backend and jit, IPOPT's ``ipopt``, the
+        wall time of one run."""
+        return SolverOptions(backend=self.backend, ipopt=dict(ipopt), jit=self.jit,
+                             max_seconds=max_seconds)
 
 
 #: ours with cayley and exp, then the baselines

@@ -97,7 +97,7 @@ def stability(path: Path, overrides: list[str], out: Path, methods: list[Method]
             cfg = files.load(path, [*overrides, manoeuvre(state, axis_v, angle)])
             f = cfg.file
             problem = files.build(cfg)
-            setting = Setting(dict(f.solver.ipopt), f.discretization.rule, f.discretization.steps)
+            setting = Setting.of(f)
             progress(f"{name}: {angle:g} rad, reference", done, total)
             ref = reference(problem, setting, state, axis_v)
             references[f"{angle:g}"] = ref

@@ -6,6 +6,11 @@ without an iteration callback, more often when it is fast (until the runs add up
 :data:`MIN_SECONDS`, at most :data:`MAX_REPEATS`), and the median of its wall times is the
 row's time. The last run is read out and diagnosed as
 :meth:`~ocgroupoid.solve.CompiledProblem.solve` does (replay, verdict, hint).
+
+Each run is held to the problem file's ``solver.max_seconds`` (IPOPT's ``max_wall_time``,
+fatrop's deadline), and an unsuccessful run is not repeated: it has no accuracy to chart,
+and the same start fails the same way again (a divergent start crawling to its time limit
+would take it once per repeat).
 """
 
 from __future__ import annotations
@@ -15,8 +20,10 @@ import time
 from dataclasses import dataclass
 from typing import Any, Callable, TypeVar
 
+from ..files.schema import ProblemFile
 from ..model.problem import Problem
 from ..nlp.method import DEFAULT_STEPS
+from ..nlp.options import MAX_SECONDS
 from ..nlp.transcription import Guess
 from ..solve import CompiledProblem, Solution, compile_problem, distinct_minima, make_solution
 from .methods import Method
@@ -28,16 +35,24 @@ Result = TypeVar("Result")
 
 @dataclass(frozen=True)
 class Setting:
-    """What a problem file fixes of every solve: IPOPT's options, order2's rule, the steps."""
+    """What a problem file fixes of every solve: IPOPT's options, order2's rule, the steps
+    and the wall time of one run (``solver.max_seconds``)."""
 
     ipopt: dict[str, Any]
     rule: str
     steps: str = DEFAULT_STEPS
+    max_seconds: float = MAX_SECONDS
+
+    @classmethod
+    def of(cls, file: ProblemFile) -> "Setting":
+        """The setting of a validated problem file."""
+        return cls(dict(file.solver.ipopt), file.discretization.rule,
+                   file.discretization.steps, file.solver.max_seconds)
 
     def compile(self, problem: Problem, method: Method, N: int) -> CompiledProblem:
         """``method`` compiled on N intervals in this setting."""
         return compile_problem(problem, method.on(N, self.rule, self.steps),
-                               method.options(self.ipopt))
+                               method.options(self.ipopt, self.max_seconds))
 
 
 @dataclass
@@ -81,8 +96,8 @@ def timed_solve(problem: Problem, method: Method, N: int, setting: Setting, repe
     guess = cold_start(solver.guesses(tr, p, start is not None), start)
     build = time.perf_counter() - t0
     runs = [tr.solve(guess, p)]
-    while len(runs) < max(1, repeats) or (sum(r.solve_seconds for r in runs) < MIN_SECONDS
-                                          and len(runs) < MAX_REPEATS):
+    while runs[-1].success and (len(runs) < max(1, repeats) or (
+            sum(r.solve_seconds for r in runs) < MIN_SECONDS and len(runs) < MAX_REPEATS)):
         runs.append(tr.solve(guess, p))
     last = runs[-1]
     sol = make_solution(tr, last, distinct_minima([last]), True, setting.ipopt)

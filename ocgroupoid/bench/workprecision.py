@@ -131,7 +131,7 @@ def work_precision(path: Path, overrides: list[str], out: Path, methods: list[Me
     f = cfg.file
     problem = files.build(cfg)
     name = name or Path(path).stem
-    setting = Setting(dict(f.solver.ipopt), f.discretization.rule, f.discretization.steps)
+    setting = Setting.of(f)
     skipped = redundant(methods, problem)
     run = [m for m in methods if m.label not in skipped]
     check_methods(problem, run, setting, min(Ns))
