@@ -185,9 +185,9 @@ def test_median_seconds_times_every_call_and_keeps_the_last_result() -> None:
 @pytest.mark.parametrize("backend", ["ipopt", "fatrop"])
 def test_a_timed_solve_is_held_to_max_seconds_and_a_failed_one_is_not_repeated(
         backend: str) -> None:
-    """The file's ``solver.max_seconds`` bounds every run of a work-precision row (a start
-    that diverges slowly once took 20 minutes a row, its repeats included); a run that fails
-    is run once, while a successful one is repeated."""
+    """The file's ``solver.max_seconds`` bounds every run of a work-precision row (it was
+    ignored: starts that diverge slowly kept the heavy top's run going for 18 minutes, their
+    repeats included); a run that fails is run once, while a successful one is repeated."""
     import dataclasses
 
     from ocgroupoid.bench.methods import Method
