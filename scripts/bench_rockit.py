@@ -4,9 +4,10 @@ Both solve ``problems/so3_rest_to_rest.yaml`` (the rigid body's rest-to-rest sle
 ``1/2 int |u|^2``) on N = 8 ... 256 intervals:
 
 * **ours**: our fastest configuration, ``order4`` with fatrop and compiled evaluation
-  (``order4@fatrop+jit``), from the first geodesic guess; its time is the backend's wall time
-  of one solve (:func:`~ocgroupoid.bench.timing.timed_solve`: the median of repeated solves
-  from the same cold start, the build not timed);
+  (``order4@fatrop+jit``), from the first geodesic guess; its time is the wall time of one
+  solve of the built NLP (:func:`~ocgroupoid.bench.timing.timed_solve`: the median of repeated
+  solves from the same cold start, each from its guess's start point to the answer read back,
+  fatrop's helper round trip included; the build not timed);
 * **rockit**: the same problem written as a rockit user writes it — unit quaternion and body
   rates as states (the model of ``bench_mpc.py``), ``MultipleShooting(N=N, M=1,
   intg="rk")`` (one RK4 step per interval, piecewise-constant controls), IPOPT with

@@ -127,7 +127,7 @@ def work_precision_chart(summary: dict[str, Any], path: Path, dpi: int = 110) ->
         ax.xaxis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
         ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
         ax.xaxis.set_minor_formatter(NullFormatter())
-        ax.set_xlabel(f"solver wall time per solve [s]  (median of at least {s['repeats']} "
+        ax.set_xlabel(f"wall time per solve [s]  (median of at least {s['repeats']} "
                       "runs from one cold start)")
         ax.set_ylabel(ylabel)
         ax.set_title(title, fontsize=10)
@@ -164,7 +164,7 @@ def work_precision_grid(summaries: list[dict[str, Any]], path: Path, dpi: int = 
         for ax, key, what in zip(row, ("cost_error", "replay_error"),
                                  ("relative cost error", "replay terminal error")):
             _panel(ax, by_method, key)
-            ax.set_xlabel("solver wall time per solve [s] (median)")
+            ax.set_xlabel("wall time per solve [s] (median)")
             ax.set_ylabel(what)
             ax.set_title(f"{summary['problem']}: {what} against time", fontsize=9)
             ax.grid(alpha=0.3, which="both")

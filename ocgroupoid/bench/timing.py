@@ -1,10 +1,15 @@
 """One timed solve: a method on N intervals, from the same cold start every repeat.
 
-The NLP is built once (not timed); IPOPT then runs ``repeats`` times from the same guess (a
-geodesic, or the multi-start guess labelled ``start`` that found the reference's minimum)
+The NLP is built once (not timed); it is then solved ``repeats`` times from the same guess
+(a geodesic, or the multi-start guess labelled ``start`` that found the reference's minimum)
 without an iteration callback, more often when it is fast (until the runs add up to
 :data:`MIN_SECONDS`, at most :data:`MAX_REPEATS`), and the median of its wall times is the
-row's time. The last run is read out and diagnosed as
+row's time. A run's time is what the caller of the built NLP waits for
+(:meth:`~ocgroupoid.nlp.transcription.Transcription.solve`, the wall time around it): the
+start point of the guess, the backend's arguments and, for fatrop, the way to its helper
+process and back, with the solve itself; the solver's own time alone left out 0.9-2.4 ms of
+fatrop's 3-13 ms on so3 at N = 16...128 (IPOPT's 0.8-1.2 ms). The last run is read out and
+diagnosed as
 :meth:`~ocgroupoid.solve.CompiledProblem.solve` does (replay, verdict, hint).
 
 Each run is held to the problem file's ``solver.max_seconds`` (IPOPT's ``max_wall_time``,
@@ -24,7 +29,7 @@ from ..files.schema import ProblemFile
 from ..model.problem import Problem
 from ..nlp.method import DEFAULT_STEPS
 from ..nlp.options import MAX_SECONDS
-from ..nlp.transcription import Guess
+from ..nlp.transcription import Guess, RawResult
 from ..solve import CompiledProblem, Solution, compile_problem, distinct_minima, make_solution
 from .methods import Method
 
@@ -57,7 +62,7 @@ class Setting:
 
 @dataclass
 class Timed:
-    """A diagnosed solution and the IPOPT wall times of its repeats (seconds)."""
+    """A diagnosed solution and the wall times of its repeats (seconds, module docstring)."""
 
     solution: Solution
     seconds: list[float]
@@ -95,10 +100,17 @@ def timed_solve(problem: Problem, method: Method, N: int, setting: Setting, repe
     p = tr.pack()
     guess = cold_start(solver.guesses(tr, p, start is not None), start)
     build = time.perf_counter() - t0
-    runs = [tr.solve(guess, p)]
-    while runs[-1].success and (len(runs) < max(1, repeats) or (
-            sum(r.solve_seconds for r in runs) < MIN_SECONDS and len(runs) < MAX_REPEATS)):
-        runs.append(tr.solve(guess, p))
-    last = runs[-1]
+    seconds: list[float] = []
+
+    def run() -> RawResult:
+        t0 = time.perf_counter()
+        r = tr.solve(guess, p)
+        seconds.append(time.perf_counter() - t0)
+        return r
+
+    last = run()
+    while last.success and (len(seconds) < max(1, repeats) or (
+            sum(seconds) < MIN_SECONDS and len(seconds) < MAX_REPEATS)):
+        last = run()
     sol = make_solution(tr, last, distinct_minima([last]), True, setting.ipopt)
-    return Timed(sol, [r.solve_seconds for r in runs], build, guess.label)
+    return Timed(sol, seconds, build, guess.label)

@@ -1,10 +1,11 @@
-"""Work-precision: IPOPT time against accuracy for every method on a geometric range of N.
+"""Work-precision: solve time against accuracy for every method on a geometric range of N.
 
 For one problem file: the reference cost (:mod:`~ocgroupoid.bench.reference`), then for every
 method and N a timed solve (:mod:`~ocgroupoid.bench.timing`) from the start that found the
 reference's minimum, one row each:
 
-* ``seconds``: the median IPOPT wall time of the repeats; ``iterations``;
+* ``seconds``: the median wall time of the repeats' solves (:mod:`~ocgroupoid.bench.timing`:
+  what the caller of the built NLP waits for); ``iterations``;
 * ``cost_error``: ``|J - J_ref| / |J_ref|``;
 * ``replay_error``: the largest replay terminal error (the controls driven through the
   continuous dynamics, the miss of every prescribed final value, in its own units).
@@ -164,8 +165,9 @@ def work_precision(path: Path, overrides: list[str], out: Path, methods: list[Me
         "problem": name, "file": str(path), "overrides": overrides,
         "settings": {"N": Ns, "repeats": repeats, "reference_N": reference_N,
                      "methods": [m.label for m in methods], "ipopt": setting.ipopt,
-                     "time": "median IPOPT wall time of the repeats from one cold start "
-                             "(build, diagnostics and replay not included)"},
+                     "time": "median wall time of the repeats' solves from one cold start: "
+                             "the start point, the backend's arguments and helper round trip, "
+                             "the solve (build, diagnostics and replay not included)"},
         "reference": ref, "skipped": skipped,
         "other_minimum": {"cost_error": OTHER_COST, "path_deviation": OTHER_PATH},
         "replay_units": units(problem), "rows": rows,

@@ -128,15 +128,16 @@ class IpoptBackend(Backend):
         watched (:attr:`watched_solver`, :attr:`watched_warm_solver`) when someone listens.
         Its deadline is IPOPT's own ``max_wall_time`` and the listener's (which stops IPOPT
         by returning True), warm or cold."""
-        bounds = self._call(self.bounds)(p=start.p)
-        duals = {"lam_g0": start.lam_g0, "lam_x0": start.lam_x0} if start.warm else {}
-        if start.listener is None:
+        if start.listener is None:  # (a solver built on first use is built before t0)
             solver = self.warm_solver if start.warm else self.solver
         else:
             solver = self.watched_warm_solver if start.warm else self.watched_solver
-            self.watch.start(start.listener, bounds["lbg"], bounds["ubg"])
         call = self._call(solver)
         t0 = time.perf_counter()
+        bounds = self._call(self.bounds)(p=start.p)
+        duals = {"lam_g0": start.lam_g0, "lam_x0": start.lam_x0} if start.warm else {}
+        if start.listener is not None:
+            self.watch.start(start.listener, bounds["lbg"], bounds["ubg"])
         r = call(x0=start.x0, p=start.p, **bounds, **duals)
         seconds = time.perf_counter() - t0
         stats = call.stats()
