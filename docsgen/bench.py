@@ -73,7 +73,7 @@ def work_precision_rows() -> str:
     out = []
     for path in sorted((DATA / "work_precision").glob("*.csv")):
         rows = _csv(f"work_precision/{path.name}")
-        body = table(["run", "method", "N", "verified", "iterations", "IPOPT s",
+        body = table(["run", "method", "N", "verified", "iterations", "solve s",
                       "cost error", "replay error"],
                      [[r["run"], f"`{r['method']}`", r["N"],
                        "yes" if r["success"] == "True" else "no", r["iterations"],

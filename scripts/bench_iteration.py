@@ -13,6 +13,15 @@ outputs, which the backends' own calls avoid, :mod:`~ocgroupoid.nlp.buffered`, a
 fatrop's set-up falls outside CasADi's timer). Each divided by the iterations, in
 milliseconds. The median of :data:`REPEATS` solves per row.
 
+Beside it, per solve: the same start solved as a caller solves it
+(:meth:`~ocgroupoid.nlp.transcription.Transcription.solve`, the time the work-precision bench
+charts), and what that costs beyond the direct call (``outside``, ms per solve): the guess's
+start point, the backend's arguments and, for fatrop, the way to its helper process and back
+(:mod:`~ocgroupoid.nlp.isolated`), less the plain call's conversions, which the backends'
+buffered calls avoid; medians of :data:`PAIRS` of each in turn, after one solve not timed
+(fatrop's helper process starts at the first).
+Left empty where that solve is not the backend's own (a fallback).
+
 Writes ``bench_iteration.json`` and ``bench_iteration.png`` (stacked bars per file, backend
 and evaluation).
 """
@@ -41,6 +50,8 @@ PROBLEMS = ROOT / "problems"
 EVALUATIONS = {"nlp_f": "objective", "nlp_g": "constraints", "nlp_grad_f": "gradient",
                "nlp_jac_g": "Jacobian", "nlp_hess_l": "Hessian"}
 REPEATS = 3
+#: the caller's solves and direct calls timed in turn for ``outside`` (sub-millisecond)
+PAIRS = 9
 QUICK = ("so3_rest_to_rest",)
 
 
@@ -55,7 +66,8 @@ def one(path: Path, backend: str, jit: bool) -> dict[str, Any] | None:
     if runner is None:
         return None
     p = tr.pack()
-    x0 = tr.point(tr.guesses(p)[0], p)
+    guess = tr.guesses(p)[0]
+    x0 = tr.point(guess, p)
     if backend == "fatrop":
         arguments = runner.arguments(x0, p)
     else:
@@ -66,6 +78,15 @@ def one(path: Path, backend: str, jit: bool) -> dict[str, Any] | None:
     # theirs, CasADi's counters add up over the calls and the total reads 0)
     timed = ca.nlpsol("timed", backend, runner.nlp, {**runner.options, "record_time": True})
     rows = []
+    walls, solves = [], []
+    tr.solve(guess, p)  # not timed: fatrop's helper process starts at the first solve
+    for _ in range(PAIRS):  # the caller's solve and the direct call in turn
+        t0 = time.perf_counter()
+        result = tr.solve(guess, p)
+        solves.append(time.perf_counter() - t0)
+        t0 = time.perf_counter()
+        timed(**arguments)
+        walls.append(time.perf_counter() - t0)
     for _ in range(REPEATS):
         t0 = time.perf_counter()
         timed(**arguments)
@@ -80,10 +101,14 @@ def one(path: Path, backend: str, jit: bool) -> dict[str, Any] | None:
                      "iterations": int(stats["iter_count"]), "success": bool(stats["success"])})
     best = {k: statistics.median(r[k] for r in rows) for k in rows[0]
             if k not in ("success", "iterations")}
+    own = result.backend == backend
+    solve_ms = statistics.median(solves) * 1e3
     return {"problem": path.stem, "backend": backend, "evaluation": "jit" if jit else "vm",
             "N": solver.disc.N,
             "scheme": cfg.file.discretization.scheme, "iterations": rows[-1]["iterations"],
-            "success": rows[-1]["success"], **best}
+            "success": rows[-1]["success"], **best,
+            "solve_ms": solve_ms if own else None,
+            "outside_ms": solve_ms - statistics.median(walls) * 1e3 if own else None}
 
 
 def chart(rows: list[dict[str, Any]], path: Path) -> None:
@@ -132,13 +157,16 @@ def main() -> None:
     write_summary(args.out / "bench_iteration.json", {"rows": rows})
     chart(rows, args.out / "bench_iteration.png")
     print(f"{'problem':24} {'backend':7} {'eval':4} {'N':>4} {'it':>4} {'ms/it':>7} "
-          + " ".join(f"{n[:8]:>8}" for n in list(EVALUATIONS.values()) + ["solver", "python"]))
+          + " ".join(f"{n[:8]:>8}" for n in list(EVALUATIONS.values()) + ["solver", "python"])
+          + f" {'solve ms':>9} {'outside':>8}")
     for r in rows:
         print(f"{r['problem']:24} {r['backend']:7} {r['evaluation']:4} {r['N']:>4} "
               f"{r['iterations']:>4} "
               f"{r['per_iteration']:7.3f} "
               + " ".join(f"{r[n]:8.3f}" for n in list(EVALUATIONS.values()) + ["solver",
-                                                                                 "python"]))
+                                                                                 "python"])
+              + "".join(" " + ("-" if r[k] is None else f"{r[k]:{w}.3f}").rjust(w)
+                        for k, w in (("solve_ms", 9), ("outside_ms", 8))))
 
 
 if __name__ == "__main__":
