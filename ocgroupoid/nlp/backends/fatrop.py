@@ -315,16 +315,15 @@ class FatropBackend(Backend):
         return replace(answer, seconds=time.perf_counter() - t0)
 
     def _solve_here(self, request: tuple[np.ndarray, np.ndarray]) -> Run:
-        """The solve itself (run by the helper process)."""
+        """The solve itself (run by the helper process; :meth:`run` times it as the caller
+        waits for it)."""
         x0, p = request
-        t0 = time.perf_counter()
         r = self._whole(x0=x0, p=p)
-        seconds = time.perf_counter() - t0
         stats = self._whole.stats()
         success, iterations = bool(stats["success"]), int(stats["iter_count"])
         status = STATUS.get(int(stats["fatrop"]["return_flag"]), FAILED)
         return Run(r["x"], float(r["f"][0]), r["lam_g"], r["lam_x"], status, success,
-                   iterations, seconds)
+                   iterations, 0.0)
 
     @cached_property
     def exported_solver(self) -> ca.Function:
