@@ -19,7 +19,10 @@ def summary(sol: Any) -> Table:
     t.add_row("status", f"[{'green' if sol.success else 'red'}]{sol.status}[/]"
               + ("" if sol.success or sol.status != "Solve_Succeeded" else " (not verified)"))
     t.add_row("cost", f"{sol.cost:.12g}")
-    t.add_row("iterations", str(sol.iterations))
+    before = d.get("runs", [])[:-1]
+    t.add_row("iterations", str(sol.iterations) + (" (after " + ", ".join(
+        f"{r['backend']} {r['iterations']}: {r['status']}" for r in reversed(before)) + ")"
+        if before else ""))
     if "T_range" in disc:
         lo, hi = disc["T_range"]
         t.add_row("final time (free)", f"{sol.T:.10g} in [{lo:g}, {hi:g}]"

@@ -51,6 +51,7 @@ def make_solution(tr: Transcription, r: RawResult, minima: Sequence[Any],
     ppoly = control_ppoly(out)
     diagnostics = diagnose(tr, r.x, r.p, r.lam_g, out, ppoly, replay=replay, solved=r.success)
     diagnostics["reconstruction_residual_nlp"] = recon_nlp
+    diagnostics["runs"] = runs(r)
     failures = verdict(tr, r, out, diagnostics, ipopt, replay_tolerance)
     diagnostics["verdict"] = {"verified": r.success and not failures, "failures": failures,
                               "check_tolerance": check_tolerance(ipopt),
@@ -78,6 +79,22 @@ def make_solution(tr: Transcription, r: RawResult, minima: Sequence[Any],
         control_ppoly=ppoly, manifolds={f.state: f.manifold for f in G.factors},
         labels=pb.labels(P),
     )
+
+
+def runs(r: RawResult) -> list[dict[str, Any]]:
+    """Every run of the solve from the start that produced ``r``, in order: the runs before it
+    (a fatrop run that stopped at an acceptable point before IPOPT's polish, a failed one
+    before a rescue or IPOPT's fallback) and its own, each ``{"backend", "status",
+    "iterations"}``. ``Solution.iterations`` is the last run's; ``solve_seconds`` counts them
+    all."""
+    return [{"backend": who, "status": status, "iterations": int(iterations)}
+            for who, status, iterations in (*r.earlier, (last_run(r.backend), r.status,
+                                                         r.iterations))]
+
+
+def last_run(backend: str) -> str:
+    """Who ran last in a solve's label (``ipopt polish`` of ``ipopt polish after fatrop``)."""
+    return backend.split(" after ")[0]
 
 
 def control_ppoly(out: dict[str, np.ndarray]) -> dict[str, np.ndarray]:

@@ -54,6 +54,8 @@ class Solution:
     N: int
     T: float
     cost: float
+    #: the iterations of the run that produced it; ``diagnostics["runs"]`` lists every run
+    #: from its start (a fatrop run before IPOPT's polish, ...), which ``solve_seconds`` counts
     iterations: int
     solve_seconds: float
     build_seconds: float

@@ -59,22 +59,26 @@ SHARED_OPTIONS = ("tol", "max_iter", "mu_init", "bound_push", "bound_frac", "con
 #: one iteration more than before or fewer (heavy_top_rotors order2 at N = 32 to 256: 21-22,
 #: were 23-28), except heavy_top_rotors order2 at N = 16 (28, was 23; IPOPT 22)
 DEFAULT_FATROP: dict[str, Any] = {"watchdog_shortened_iter_trigger": 0, "max_soc": 20}
-#: fatrop's stop at an acceptable point: its error below its acceptable tolerance (its own,
-#: which CasADi's interface does not let us set) for this many iterations in a row. Near
-#: some solutions with active bounds fatrop calls its KKT system indefinite and regularises
-#: it in every iteration, and its last steps converge linearly, or not at all
-#: (quadrotor_min_time, N = 256: 500 iterations, 38 s, the dual infeasibility stuck at
-#: 1e-7); IPOPT finishes from the point it reached, with its multipliers, in a few
-#: iterations (:func:`~ocgroupoid.nlp.backends.policy.in_turn`: 104 + 8 iterations there,
-#: 3.2 s in all; 123 + 6 since its bounds hold at the interval ends only). The count is
-#: high enough that a slow but converging run ends by itself
-#: (fatrop takes 4-75 iterations in all on every problem file at N = 16 to 256 from the
-#: first guess, scripts/bench_fatrop.py)
-ACCEPTABLE_STOP: dict[str, Any] = {"acceptable_iter": 50}
+#: fatrop's stop at an acceptable point: its error below ``tol_acceptable`` for
+#: ``acceptable_iter`` iterations in a row. Near some solutions with active bounds fatrop
+#: calls its KKT system indefinite and regularises it in every iteration, and its last steps
+#: converge linearly, or not at all (quadrotor_min_time, N = 256: 500 iterations, 38 s, the
+#: dual infeasibility stuck at 1e-7); IPOPT finishes from the point it reached, with its
+#: multipliers, in a few iterations (:func:`~ocgroupoid.nlp.backends.policy.in_turn`). With
+#: fatrop's own tolerance (1e-6) and 50 iterations in a row it crawled 123 iterations there
+#: before IPOPT's 6 (11.4 s in all, one run); from the multi-start's "long way round" 158 + 5
+#: at N = 64 (1.21 s), 99 + 4 at N = 128 (1.29 s), 81 + 4 at N = 256 (2.42 s). With 1e-5 and
+#: 20 it stops after 51 + 7 (5.9 s), 44 + 7 (0.46 s), 59 + 4 (0.88 s), 43 + 6 (2.12 s), the
+#: same costs. A run that converges stays fatrop's: of the 120 runs of
+#: scripts/bench_fatrop.py (every problem file, N = 16 to 256, 4-63 iterations) one other
+#: changed, so3_minimum_time order2 at N = 64, 35 iterations to 33 + 2 (10 iterations in a
+#: row stopped two converging runs: quadrotor_min_time order4 at N = 64 after 31 of 32)
+ACCEPTABLE_STOP: dict[str, Any] = {"tol_acceptable": 1e-5, "acceptable_iter": 20}
 #: IPOPT options fatrop has under another name: constr_mult_init_max 0 (our default: start from
 #: zero multipliers, not least-squares ones) is fatrop's lam_max 0 (measured on so3, N = 256:
-#: 7 -> 4 iterations, as IPOPT's; the other problem files unchanged)
-RENAMED_OPTIONS = {"constr_mult_init_max": "lam_max"}
+#: 7 -> 4 iterations, as IPOPT's; the other problem files unchanged); acceptable_tol is
+#: fatrop's tol_acceptable (:data:`ACCEPTABLE_STOP`)
+RENAMED_OPTIONS = {"constr_mult_init_max": "lam_max", "acceptable_tol": "tol_acceptable"}
 #: what a failed fatrop solve reports where IPOPT has no name for the reason
 FAILED = "Fatrop_Failed"
 #: fatrop's return flags (``stats()["fatrop"]["return_flag"]``, its ``IpSolverReturnFlag``)
