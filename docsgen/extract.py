@@ -20,8 +20,8 @@ ROOT = Path(__file__).resolve().parent.parent
 RESULTS = ROOT / "results"
 DATA = ROOT / "docs" / "benchmarks" / "data"
 #: the columns kept of a work-precision row
-WP_COLUMNS = ("run", "method", "N", "success", "iterations", "seconds", "cost_error",
-              "replay_error")
+WP_COLUMNS = ("run", "method", "N", "success", "iterations", "iterations_all", "backend",
+              "seconds", "cost_error", "replay_error")
 #: the landing accuracies at which the best configurations are set against rk4_quat+jit
 LANDING_LEVELS = (1e-4, 1e-6, 1e-8)
 #: each table's input in the results folder: an extract runs when its input is there

@@ -17,7 +17,7 @@ from ocgroupoid.bench.chart import work_precision_grid
 from ocgroupoid.bench.equal_accuracy import compare, headline, report, time_at
 from ocgroupoid.bench.record import read_rows
 from ocgroupoid.bench.stability import manoeuvre
-from ocgroupoid.bench.timing import median_seconds
+from ocgroupoid.bench.timing import interleaved, median_seconds
 from ocgroupoid.cli import app
 from ocgroupoid.verify.richardson import observed_orders
 
@@ -47,6 +47,7 @@ def test_work_precision_writes_rows_summary_and_chart(tmp_path: Path) -> None:
     for x in summary["rows"]:
         assert x["status"] == "Solve_Succeeded" and x["minimum"] == "same", x
         assert 0 < x["cost_error"] < 1e-1 and x["replay_error"] > 0 and x["seconds"] > 0
+        assert x["backend"] == "ipopt" and x["iterations_all"] == x["iterations"] > 0
     assert (tmp_path / "figures" / "work_precision_so3_rest_to_rest.png").read_bytes()[:8] \
         == PNG
     text = report(summary)  # what the command and scripts/bench_schemes.py print
@@ -56,8 +57,8 @@ def test_work_precision_writes_rows_summary_and_chart(tmp_path: Path) -> None:
 
 
 def test_an_interrupted_run_keeps_its_finished_rows(tmp_path: Path, monkeypatch) -> None:
-    """Ctrl-C during the third timed solve: exit 130, the reference and two rows kept."""
-    real = workprecision.timed_solve
+    """Ctrl-C while the third row is read out: exit 130, the reference and two rows kept."""
+    real = workprecision.row
     calls = []
 
     def interrupted(*args, **kwargs):
@@ -66,7 +67,7 @@ def test_an_interrupted_run_keeps_its_finished_rows(tmp_path: Path, monkeypatch)
             raise KeyboardInterrupt
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(workprecision, "timed_solve", interrupted)
+    monkeypatch.setattr(workprecision, "row", interrupted)
     r = work_precision(tmp_path)
     assert r.exit_code == 130
     jsonl = tmp_path / "work_precision" / "so3_rest_to_rest.jsonl"
@@ -173,6 +174,29 @@ def test_time_at_equal_accuracy_is_read_on_the_log_log_line() -> None:
 def test_observed_orders_of_every_halving_and_none_without_a_rate() -> None:
     orders = observed_orders([1.0, 0.25, 1 / 64, 0.0])
     assert orders[:2] == [pytest.approx(2.0), pytest.approx(4.0)] and orders[2] is None
+
+
+def test_interleaved_solves_one_of_each_trial_per_round() -> None:
+    """Rounds, not rows: every trial that wants another solve gets one per round, in turn,
+    until none wants more; a trial done early drops out."""
+    order: list[str] = []
+
+    class Counted:
+        def __init__(self, name: str, solves: int) -> None:
+            self.name, self.left = name, solves
+
+        def wants(self, repeats: int) -> bool:
+            return self.left > 0
+
+        def run(self) -> None:
+            order.append(self.name)
+            self.left -= 1
+
+    rounds: list[tuple[int, int]] = []
+    interleaved([Counted("a", 3), Counted("b", 1), Counted("c", 2)], 3,  # type: ignore[list-item]
+                lambda k, n: rounds.append((k, n)))
+    assert order == ["a", "b", "c", "a", "c", "a"]
+    assert rounds == [(0, 3), (1, 2), (2, 1)]
 
 
 def test_median_seconds_times_every_call_and_keeps_the_last_result() -> None:

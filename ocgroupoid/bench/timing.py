@@ -1,10 +1,12 @@
 """One timed solve: a method on N intervals, from the same cold start every repeat.
 
-The NLP is built once (not timed); it is then solved ``repeats`` times from the same guess
-(a geodesic, or the multi-start guess labelled ``start`` that found the reference's minimum)
-without an iteration callback, more often when it is fast (until the runs add up to
-:data:`MIN_SECONDS`, at most :data:`MAX_REPEATS`), and the median of its wall times is the
-row's time. A run's time is what the caller of the built NLP waits for
+The NLP is built once (not timed, :class:`Trial`); it is then solved ``repeats`` times from
+the same guess (a geodesic, or the multi-start guess labelled ``start`` that found the
+reference's minimum) without an iteration callback, more often when it is fast (until the
+runs add up to :data:`MIN_SECONDS`, at most :data:`MAX_REPEATS`), and the median of its wall
+times is the row's time. The solves run back to back (:func:`timed_solve`) or in rounds with
+other methods and grids (:func:`interleaved`, what the work-precision benchmark does).
+A run's time is what the caller of the built NLP waits for
 (:meth:`~ocgroupoid.nlp.transcription.Transcription.solve`, the wall time around it): the
 start point of the guess, the backend's arguments and, for fatrop, the way to its helper
 process and back, with the solve itself; the solver's own time alone left out 0.9-2.4 ms of
@@ -25,6 +27,7 @@ import time
 from dataclasses import dataclass
 from typing import Any, Callable, TypeVar
 
+from ..errors import OcgError
 from ..files.schema import ProblemFile
 from ..model.problem import Problem
 from ..nlp.method import DEFAULT_STEPS
@@ -90,27 +93,81 @@ def cold_start(solver_guesses: list[Guess], start: str | None) -> Guess:
     return next((g for g in solver_guesses if g.label == start), solver_guesses[0])
 
 
+class Trial:
+    """``method`` built on N intervals and its cold start (module docstring): its solves are
+    run one at a time (:meth:`run`), alone (:func:`timed_solve`) or in rounds with others
+    (:func:`interleaved`). Building raises what building raises (ConfigError,
+    SingularityError)."""
+
+    def __init__(self, problem: Problem, method: Method, N: int, setting: Setting,
+                 start: str | None = None) -> None:
+        t0 = time.perf_counter()
+        solver = setting.compile(problem, method, N)
+        self.tr, self.ipopt = solver.transcription, setting.ipopt
+        self.p = self.tr.pack()
+        self.guess = cold_start(solver.guesses(self.tr, self.p, start is not None), start)
+        self.build_seconds = time.perf_counter() - t0
+        #: the wall time of every solve so far, and the last solve's result
+        self.seconds: list[float] = []
+        self.last: RawResult | None = None
+        #: what a solve raised (a start point that cannot be formed, ...): no more solves
+        self.error: OcgError | None = None
+
+    def wants(self, repeats: int) -> bool:
+        """Whether it takes another solve: ``repeats`` in all, more while they add up to
+        less than :data:`MIN_SECONDS` (at most :data:`MAX_REPEATS`); none after a failure."""
+        if self.error is not None:
+            return False
+        if self.last is None:
+            return True
+        return self.last.success and (len(self.seconds) < max(1, repeats) or (
+            sum(self.seconds) < MIN_SECONDS and len(self.seconds) < MAX_REPEATS))
+
+    def run(self) -> None:
+        """One solve from the cold start, timed as its caller waits for it (what it raises
+        is kept in :attr:`error`)."""
+        t0 = time.perf_counter()
+        try:
+            self.last = self.tr.solve(self.guess, self.p)
+        except OcgError as e:
+            self.error = e
+            return
+        self.seconds.append(time.perf_counter() - t0)
+
+    def timed(self) -> Timed:
+        """The last solve read out and diagnosed, with the times of all (after a run);
+        raises what a solve raised."""
+        if self.error is not None:
+            raise self.error
+        assert self.last is not None, "a trial is timed after a solve"
+        sol = make_solution(self.tr, self.last, distinct_minima([self.last]), True, self.ipopt)
+        return Timed(sol, self.seconds, self.build_seconds, self.guess.label)
+
+
 def timed_solve(problem: Problem, method: Method, N: int, setting: Setting, repeats: int,
                 start: str | None = None) -> Timed:
     """Build ``method`` on N intervals and solve it ``repeats`` times from one cold start
     (module docstring); raises what building raises (ConfigError, SingularityError)."""
-    t0 = time.perf_counter()
-    solver = setting.compile(problem, method, N)
-    tr = solver.transcription
-    p = tr.pack()
-    guess = cold_start(solver.guesses(tr, p, start is not None), start)
-    build = time.perf_counter() - t0
-    seconds: list[float] = []
+    trial = Trial(problem, method, N, setting, start)
+    while trial.wants(repeats):
+        trial.run()
+    return trial.timed()
 
-    def run() -> RawResult:
-        t0 = time.perf_counter()
-        r = tr.solve(guess, p)
-        seconds.append(time.perf_counter() - t0)
-        return r
 
-    last = run()
-    while last.success and (len(seconds) < max(1, repeats) or (
-            sum(seconds) < MIN_SECONDS and len(seconds) < MAX_REPEATS)):
-        last = run()
-    sol = make_solution(tr, last, distinct_minima([last]), True, setting.ipopt)
-    return Timed(sol, seconds, build, guess.label)
+def interleaved(trials: list[Trial], repeats: int,
+                progress: Callable[[int, int], None] = lambda *_: None) -> None:
+    """Solve the trials in rounds, one solve of each that wants another per round
+    (:meth:`Trial.wants`), until none does; ``progress(round, solves)`` before each round.
+    Each row's repeats are spread over the whole run rather than taken back to back, so a
+    slow phase of a shared machine (seconds long) slows every row alike and leaves their
+    ratios. plate_ball_rotating, fatrop, N = 64, four builds solved in turn 15 times each,
+    twice: medians 14.7-15.4 ms in one run, 10.5-12.5 ms in the other. Over the 11 problem
+    files' work-precision runs (2 cores, 2026-11-28) the time of ``order4@fatrop+jit`` over
+    ``rk4_quat+jit`` at the same N moved by 1.15 times between two runs in rounds (median
+    over 42 pairs; 1.41 at the 90th percentile), by 1.26 (1.68) between two back to back."""
+    round_ = 0
+    while todo := [t for t in trials if t.wants(repeats)]:
+        progress(round_, len(todo))
+        for t in todo:
+            t.run()
+        round_ += 1

@@ -5,7 +5,9 @@ method and N a timed solve (:mod:`~ocgroupoid.bench.timing`) from the start that
 reference's minimum, one row each:
 
 * ``seconds``: the median wall time of the repeats' solves (:mod:`~ocgroupoid.bench.timing`:
-  what the caller of the built NLP waits for); ``iterations``;
+  what the caller of the built NLP waits for), ``seconds_all`` every repeat's;
+  ``iterations`` (the last run's), ``iterations_all`` (every run's: a fatrop run before
+  IPOPT's polish as well) and ``backend`` (who ran: ``ipopt polish after fatrop``, ...);
 * ``cost_error``: ``|J - J_ref| / |J_ref|``;
 * ``replay_error``: the largest replay terminal error (the controls driven through the
   continuous dynamics, the miss of every prescribed final value, in its own units).
@@ -13,8 +15,11 @@ reference's minimum, one row each:
 A row in another local minimum than the reference's (:mod:`~ocgroupoid.bench.minimum`: its
 cost error beyond 1e-2, its path away from the reference's, its cost nearer another minimum
 the multi-start met) is flagged ``minimum: other`` and left off the chart and the
-comparisons. Rows go to ``<out>/work_precision/<name>.jsonl`` as they finish; the summary to
-``<name>.json``, the chart to ``<out>/figures/work_precision_<name>.png``.
+comparisons. Every method is built on every N first; then their solves run in rounds, one
+of each per round (:func:`~ocgroupoid.bench.timing.interleaved`), so that a slow phase of
+the machine slows every row alike. Rows go to ``<out>/work_precision/<name>.jsonl`` as they
+are read out after the rounds (an interrupt keeps the reference and the rows read out); the
+summary to ``<name>.json``, the chart to ``<out>/figures/work_precision_<name>.png``.
 """
 
 from __future__ import annotations
@@ -33,7 +38,7 @@ from .methods import Method, redundant
 from .minimum import OTHER_COST, OTHER_PATH, path_deviation, which_minimum
 from .record import Rows, write_summary
 from .reference import STEPS, check_reference_N, reference
-from .timing import Setting, Timed, timed_solve
+from .timing import Setting, Timed, Trial, interleaved
 
 DEFAULT_NS = (8, 16, 32, 64, 128)
 DEFAULT_REPEATS = 3
@@ -76,6 +81,7 @@ def row(method: Method, N: int, timed: Timed, ref: dict[str, Any], finest: Solut
     return {"kind": "row", "method": method.label, "scheme": method.scheme,
             "retraction": method.retraction, "N": N, "status": sol.status,
             "success": sol.success, "cost": sol.cost, "iterations": sol.iterations,
+            "iterations_all": sum(r["iterations"] for r in d["runs"]), "backend": sol.backend,
             "seconds": timed.median, "seconds_all": timed.seconds,
             "build_seconds": timed.build_seconds, "start": timed.start,
             "cost_error": cost_error,
@@ -137,7 +143,7 @@ def work_precision(path: Path, overrides: list[str], out: Path, methods: list[Me
     run = [m for m in methods if m.label not in skipped]
     check_methods(problem, run, setting, min(Ns))
     where = outputs(out, name)
-    total = STEPS + len(run) * len(Ns)
+    total = STEPS + 2 * len(run) * len(Ns) + 1
     done = [0]
 
     def step(what: str) -> None:
@@ -149,12 +155,26 @@ def work_precision(path: Path, overrides: list[str], out: Path, methods: list[Me
         ref, finest = reference(problem, setting, reference_N, bool(f.solver.multistart),
                                 step)
         jsonl.append({"kind": "reference", **ref})
+        trials: dict[tuple[str, int], Trial | OcgError] = {}
+        for m in run:
+            for N in Ns:
+                step(f"build {m.label} N={N}")
+                try:
+                    trials[m.label, N] = Trial(problem, m, N, setting, ref["start"])
+                except OcgError as e:
+                    trials[m.label, N] = e
+        step("solves in rounds")
+        interleaved([t for t in trials.values() if isinstance(t, Trial)], repeats,
+                    lambda k, n: progress(f"{name}: round {k + 1}, {n} solves", done[0],
+                                          total))
         for m in run:
             for N in Ns:
                 step(f"{m.label} N={N}")
+                trial = trials[m.label, N]
                 try:
-                    r = row(m, N, timed_solve(problem, m, N, setting, repeats, ref["start"]),
-                            ref, finest)
+                    if isinstance(trial, OcgError):
+                        raise trial
+                    r = row(m, N, trial.timed(), ref, finest)
                 except OcgError as e:
                     r = error_row(m, N, e)
                 jsonl.append(r)
@@ -165,9 +185,10 @@ def work_precision(path: Path, overrides: list[str], out: Path, methods: list[Me
         "problem": name, "file": str(path), "overrides": overrides,
         "settings": {"N": Ns, "repeats": repeats, "reference_N": reference_N,
                      "methods": [m.label for m in methods], "ipopt": setting.ipopt,
-                     "time": "median wall time of the repeats' solves from one cold start: "
-                             "the start point, the backend's arguments and helper round trip, "
-                             "the solve (build, diagnostics and replay not included)"},
+                     "time": "median wall time of the repeats' solves from one cold start, "
+                             "every method and N solved in turn in rounds: the start point, "
+                             "the backend's arguments and helper round trip, the solve "
+                             "(build, diagnostics and replay not included)"},
         "reference": ref, "skipped": skipped,
         "other_minimum": {"cost_error": OTHER_COST, "path_deviation": OTHER_PATH},
         "replay_units": units(problem), "rows": rows,
