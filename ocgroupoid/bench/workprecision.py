@@ -171,12 +171,13 @@ def work_precision(path: Path, overrides: list[str], out: Path, methods: list[Me
             for N in Ns:
                 step(f"{m.label} N={N}")
                 trial = trials[m.label, N]
-                try:
-                    if isinstance(trial, OcgError):
-                        raise trial
-                    r = row(m, N, trial.timed(), ref, finest)
-                except OcgError as e:
-                    r = error_row(m, N, e)
+                if isinstance(trial, OcgError):  # its build failed
+                    r = error_row(m, N, trial)
+                else:
+                    try:
+                        r = row(m, N, trial.timed(), ref, finest)
+                    except OcgError as e:
+                        r = error_row(m, N, e)
                 jsonl.append(r)
                 rows.append(r)
     progress(f"{name}: chart", total, total)
