@@ -205,6 +205,41 @@ def test_jit_compiled_fatrop_equals_the_virtual_machine(tmp_path: Path, monkeypa
     np.testing.assert_allclose(b.x, a.x, rtol=0, atol=1e-10)
 
 
+def test_jit_compiles_ipopts_functions_beside_fatrops(tmp_path: Path, monkeypatch) -> None:
+    """solver.jit with fatrop compiles IPOPT's Functions too (its polish and fallback), into
+    fatrop's library: one library, the stages' derivatives made once for both assemblies,
+    and IPOPT's Functions (their Hessian from the stage Lagrangian's) equal to the virtual
+    machine's, so that IPOPT's run from the same start is the same run."""
+    import shutil
+    if shutil.which("cc") is None and shutil.which("gcc") is None:
+        pytest.skip("no C compiler")
+    monkeypatch.setenv("OCGROUPOID_JIT_CACHE", str(tmp_path))
+    vm = transcription("quadrotor_min_time", "order4", N=8, backend="fatrop")
+    jit = transcription("quadrotor_min_time", "order4", N=8, backend="fatrop", jit=True)
+    assert jit.jit_compiled and len(list(tmp_path.glob("ocg_jit_*.so"))) == 1
+    staged = jit.fatrop.form.blocks[0]
+    original = next(b for b in jit.blocks if b.fun is staged.fun)
+    assert jit.derivatives.of(staged) is jit.derivatives.of(original)
+    ours, theirs = vm.backends[-1].options["cache"], jit.backends[-1].options["cache"]
+    assert all(theirs[k].name() == k for k in theirs)  # nlpsol's cache goes by name
+    called = {fn.instruction_MX(i).which_function().name() for fn in theirs.values()
+              for i in range(fn.n_instructions()) if fn.instruction_MX(i).is_call()}
+    assert called == {f"s1_{k}" for k in theirs}  # each calls its code in the library
+    rng = np.random.default_rng(3)
+    x, p = rng.standard_normal(vm.nx), vm.pack()
+    lam_g = rng.standard_normal(vm.ng)
+    for name, args in (("nlp_grad_f", (x, p)), ("nlp_jac_g", (x, p)),
+                       ("nlp_hess_l", (x, p, 0.7, lam_g))):
+        for a, b in zip(ours[name].call(list(args)), theirs[name].call(list(args))):
+            a, b = ca.DM(a).full(), ca.DM(b).full()
+            np.testing.assert_allclose(b, a, rtol=1e-12, atol=1e-12 * max(1.0, np.abs(a).max()))
+    guess = vm.guesses(p)[0]
+    x0, p = vm.start_point(guess, p)
+    a, b = vm.backends[-1].run(Start(x0, p)), jit.backends[-1].run(Start(x0, p))
+    assert a.success and b.success and a.iterations == b.iterations
+    assert abs(a.f - b.f) <= 1e-10 * abs(a.f)
+
+
 def test_fatrop_reads_the_ipopt_options_it_shares() -> None:
     """tol and max_iter pass through, constr_mult_init_max (zero initial multipliers, our
     default) becomes fatrop's lam_max and acceptable_tol its tol_acceptable (else its

@@ -189,6 +189,27 @@ class StageDerivatives:
                                       [grad_l, _nonzeros(H)])
 
 
+class Derivatives:
+    """The stage derivatives (:class:`StageDerivatives`) of an NLP's block functions, made
+    once per function: the assemblies of one NLP (IPOPT's, and fatrop's of its stage form,
+    whose blocks call the same functions) then call the same derivative Functions, and one
+    library compiled for both (:func:`~ocgroupoid.nlp.jit.compiled`) holds each once.
+    With ``lagrangian``, every assembly's Hessian comes from the stage Lagrangian's Function
+    (:attr:`StageDerivatives.lagrangian`, the one fatrop's assembly needs) rather than from
+    the Hessian's own (:attr:`StageDerivatives.hess`, which skips the gradient)."""
+
+    def __init__(self, lagrangian: bool = False) -> None:
+        self.lagrangian = lagrangian
+        self._made: dict[tuple[int, int], tuple[ca.Function, StageDerivatives]] = {}
+
+    def of(self, block: Block) -> StageDerivatives:
+        """The derivatives of ``block``'s stage function (made on first use)."""
+        key = (id(block.fun), block.n_var)  # the Function is held beside: its id stays its
+        if key not in self._made:
+            self._made[key] = (block.fun, StageDerivatives(block))
+        return self._made[key][1]
+
+
 def _triplet(M: ca.SX) -> tuple[np.ndarray, np.ndarray]:
     rows, cols = M.sparsity().get_triplet()
     return np.array(rows, dtype=np.int64), np.array(cols, dtype=np.int64)
@@ -221,7 +242,8 @@ def plain_nlp(blocks: list[Block], x: ca.MX, p: ca.MX) -> dict[str, ca.MX]:
     return {"x": x, "p": p, "f": f, "g": g}
 
 
-def assemble(blocks: list[Block], x: ca.MX, p: ca.MX, whole: bool = False) -> dict[str, Any]:
+def assemble(blocks: list[Block], x: ca.MX, p: ca.MX, whole: bool = False,
+             derivatives: Derivatives | None = None) -> dict[str, Any]:
     """The NLP functions IPOPT needs, from the blocks: f, g and their derivatives.
 
     Returns ``{"f", "g", "nlp_grad_f", "nlp_jac_g", "nlp_hess_l"}``: the expressions f and g
@@ -229,8 +251,10 @@ def assemble(blocks: list[Block], x: ca.MX, p: ca.MX, whole: bool = False) -> di
     looks up in its function cache. ``nlp_hess_l`` is IPOPT's, the upper triangle of the
     Hessian of the Lagrangian ``lam_f f + lam_g . g``; with ``whole``, fatrop's: the
     Lagrangian's gradient and its whole (symmetric) Hessian, both summed from the stages'
-    (one graph per stage, so the gradient costs no Jacobian product).
+    (one graph per stage, so the gradient costs no Jacobian product). The stages'
+    derivatives are ``derivatives``' (:class:`Derivatives`; default: made for this call).
     """
+    derivatives = derivatives if derivatives is not None else Derivatives()
     nx = x.numel()
     for b in blocks:  # the trailing entries that point into p in every column
         in_p = np.all(b.idx >= nx, axis=1)
@@ -240,7 +264,7 @@ def assemble(blocks: list[Block], x: ca.MX, p: ca.MX, whole: bool = False) -> di
     lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", ng)
     grad, jac, hess, grad_l = _Scatter(), _Scatter(), _Scatter(), _Scatter()
     for b, Z in zip(blocks, inputs):
-        d = StageDerivatives(b)
+        d = derivatives.of(b)
         LAM = ca.reshape(lam_g[b.g_offset:b.g_offset + b.m * b.ncols], b.m, b.ncols)
         var = b.idx[: b.n_var]  # (stage entry, column) -> index into w
         grad.add(d.grad.map(b.ncols)(Z), var, np.zeros_like(var))
@@ -248,9 +272,10 @@ def assemble(blocks: list[Block], x: ca.MX, p: ca.MX, whole: bool = False) -> di
         jac.add(d.jac.map(b.ncols)(Z),
                 b.g_offset + np.arange(b.ncols)[None, :] * b.m + d.jac_rows[:, None],
                 var[d.jac_cols, :])
-        if whole:
+        if whole or derivatives.lagrangian:
             gl, H = d.lagrangian.map(b.ncols)(Z, lam_f, LAM)
-            grad_l.add(gl, var, np.zeros_like(var))
+            if whole:
+                grad_l.add(gl, var, np.zeros_like(var))
         else:
             H = d.hess.map(b.ncols)(Z, lam_f, LAM)
         hess.add(H, var[d.hess_rows, :], var[d.hess_cols, :])

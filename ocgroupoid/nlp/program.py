@@ -33,7 +33,7 @@ from ..model.boundary_values import prescribe
 from ..model.consistency import check_order
 from ..model.problem import Boundary, Problem
 from ..model.values import check_horizon
-from .assembly import Block, Kind, assemble
+from .assembly import Block, Derivatives, Kind, assemble
 from .boundary import FinalConditions
 from .layout import Layout, Masks
 from .method import Discretization, Method
@@ -78,7 +78,8 @@ def casadi_name(name: str) -> str:
 class NonlinearProgram:
     """The NLP of (problem, method), for any parameters p: no solver (module docstring)."""
 
-    def __init__(self, problem: Problem, method: Method) -> None:
+    def __init__(self, problem: Problem, method: Method,
+                 derivatives: Derivatives | None = None) -> None:
         t0 = time.perf_counter()
         if problem.cost is None:
             raise ConfigError(f"problem {problem.name!r} has no cost; call minimize()")
@@ -102,9 +103,12 @@ class NonlinearProgram:
                                                            self.scheme, disc.N)
         t1 = time.perf_counter()
         x, p = ca.MX.sym("x", self.nx), ca.MX.sym("p", self.np)
+        #: the stages' derivative Functions (:class:`~ocgroupoid.nlp.assembly.Derivatives`),
+        #: which another assembly of the same blocks (fatrop's stage form) calls as well
+        self.derivatives = derivatives if derivatives is not None else Derivatives()
         #: the graphs f and g and their assembled derivatives (``nlp_grad_f``, ``nlp_jac_g``,
         #: ``nlp_hess_l``), which every backend takes
-        self.functions = assemble(self.blocks, x, p)
+        self.functions = assemble(self.blocks, x, p, derivatives=self.derivatives)
         t2 = time.perf_counter()
         self.ng = int(self.functions["g"].numel())
         self.nlp = {"x": x, "p": p, "f": self.functions["f"], "g": self.functions["g"]}

@@ -19,6 +19,7 @@ import numpy as np
 
 from ..model.problem import Problem
 from . import backends
+from .assembly import Derivatives
 from .backends import FatropBackend, IpoptBackend, Start, in_turn, ipopt_options
 from .backends.base import Attempt, never
 from .backends.policy import Rescue
@@ -56,8 +57,11 @@ class Transcription(NonlinearProgram):
     def __init__(self, problem: Problem, method: Method,
                  options: SolverOptions | None = None) -> None:
         t0 = time.perf_counter()
-        super().__init__(problem, method)
-        self.options = options = options if options is not None else SolverOptions()
+        options = options if options is not None else SolverOptions()
+        # fatrop's and IPOPT's compiled Functions share the stages' (backends.build)
+        super().__init__(problem, method, Derivatives(
+            lagrangian=options.jit and options.backend == FatropBackend.name))
+        self.options = options
         #: compiled evaluation (:mod:`~ocgroupoid.nlp.jit`), and the backend's name
         self.jit, self.backend = options.jit, options.backend
         #: the time limit of one run of the backend (IPOPT's ``max_wall_time``)

@@ -6,17 +6,19 @@ from __future__ import annotations
 from ..options import SolverOptions
 from .base import INTERRUPTED, TIMED_OUT, Backend, Graph, Run, Start
 from .fatrop import FatropBackend
-from .ipopt import DEFAULT_IPOPT, IpoptBackend, ipopt_options
+from .ipopt import DEFAULT_IPOPT, IpoptBackend, evaluated, ipopt_options
 from .policy import in_turn
 
 
 def build(nlp: Graph, options: SolverOptions) -> list[Backend]:
     """The backends a solve of ``nlp`` runs in turn (:func:`in_turn`): IPOPT; or fatrop,
-    then IPOPT from the same start when fatrop fails. Compiled evaluation (``jit``) is the
-    first backend's."""
+    then IPOPT from the same start when fatrop fails, or from its point when it stopped near
+    a solution. With ``jit`` both are compiled, into one library (their stage derivatives
+    once: ``nlp.derivatives`` with the Lagrangian's Hessian for both)."""
     if options.backend == FatropBackend.name:
-        ipopt = IpoptBackend(nlp, options)
-        return [FatropBackend(nlp, options, options.jit), ipopt]
+        fatrop = FatropBackend(nlp, options, options.jit,
+                               evaluated(nlp) if options.jit else None)
+        return [fatrop, IpoptBackend(nlp, options, compiled_functions=fatrop.compiled_beside)]
     return [IpoptBackend(nlp, options, options.jit)]
 
 

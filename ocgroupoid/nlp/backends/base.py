@@ -23,7 +23,7 @@ from typing import Any, Callable, ClassVar, Protocol
 import casadi as ca
 import numpy as np
 
-from ..assembly import Block
+from ..assembly import Block, Derivatives
 from ..watch import Listener
 
 #: what a solve reports that was stopped at its deadline (IPOPT's name for it) or by Ctrl-C
@@ -46,6 +46,7 @@ class Graph(Protocol):
     nlp: dict[str, ca.MX]
     functions: dict[str, ca.Function]
     blocks: list[Block]
+    derivatives: Derivatives
     nx: int
     np: int
     ng: int

@@ -30,7 +30,7 @@ import casadi as ca
 import numpy as np
 
 from ...errors import ConfigError
-from ..assembly import assemble
+from ..assembly import Derivatives, assemble
 from ..buffered import Buffered
 from ..isolated import NAN_LIMIT, Isolated, Stopped
 from ..jit import compiled
@@ -182,14 +182,16 @@ def _rows_scaled(jac: ca.MX, s: ca.MX) -> ca.MX:
     return ca.sparsity_cast(jac.nz[:] * s[rows], jac.sparsity())
 
 
-def _functions(sf: StageForm, np_: int) -> tuple[dict[str, Any], dict[str, ca.Function]]:
+def _functions(sf: StageForm, np_: int, derivatives: Derivatives
+               ) -> tuple[dict[str, Any], dict[str, ca.Function]]:
     """The NLP dict and the five Functions fatrop evaluates, in stage-form order, over the
     parameters ``q = [p; s; s_f]``: the rows multiplied by ``s`` and the objective by ``s_f``
-    (:func:`_scales` gives them at a start)."""
+    (:func:`_scales` gives them at a start); the stages' derivatives are the NLP's own
+    (``derivatives``)."""
     z, p = ca.MX.sym("z", sf.nz), ca.MX.sym("p", np_)
     s, s_f = ca.MX.sym("s", sf.order.size), ca.MX.sym("s_f")
     q = ca.vertcat(p, s, s_f)
-    fns = assemble(sf.blocks, z, p, whole=True)
+    fns = assemble(sf.blocks, z, p, whole=True, derivatives=derivatives)
     order = sf.order.tolist()
     g = fns["g"][order]
     _, jac = fns["nlp_jac_g"](z, p)
@@ -215,11 +217,13 @@ def _functions(sf: StageForm, np_: int) -> tuple[dict[str, Any], dict[str, ca.Fu
 class FatropBackend(Backend):
     """The fatrop instance of a block NLP over ``w = [x; p]``, solved in the original
     variables: points, bounds and multipliers are mapped in and out (:class:`StageForm`);
-    ``jit`` compiles its Functions."""
+    ``jit`` compiles its Functions, and ``beside`` into the same library (IPOPT's:
+    :attr:`compiled_beside`)."""
 
     name = "fatrop"
 
-    def __init__(self, nlp: Graph, options: SolverOptions, jit: bool = False) -> None:
+    def __init__(self, nlp: Graph, options: SolverOptions, jit: bool = False,
+                 beside: dict[str, ca.Function] | None = None) -> None:
         t0 = time.perf_counter()
         name, ipopt = nlp.function_name, ipopt_options(options)
         try:
@@ -227,14 +231,18 @@ class FatropBackend(Backend):
         except NotStaged as err:
             raise ConfigError(f"solver.backend fatrop needs the NLP as a chain of stages, and "
                               f"this one is not ({err}); use solver.backend: ipopt") from None
-        graph, functions = _functions(self.form, nlp.np)
+        graph, functions = _functions(self.form, nlp.np, nlp.derivatives)
         #: the bounds fatrop is given, in stage form (:func:`tightened`)
         self.bounds = tightened(nlp.bounds_function, self.form)
         self.max_iter = int(ipopt.get("max_iter", 3000))
         own = {"print_level": 0, **DEFAULT_FATROP, **ACCEPTABLE_STOP}
         self.jit_compiled = False
+        #: ``beside`` compiled with fatrop's Functions (with jit and beside), else None
+        self.compiled_beside: dict[str, ca.Function] | None = None
         if jit:
-            functions, self.jit_compiled = compiled(functions)
+            (functions, *others), self.jit_compiled = compiled(
+                functions, *([beside] if beside is not None else []))
+            self.compiled_beside = others[0] if others else None
         #: the rows' and the objective's scales at a start (:func:`_scales`)
         self.scales = _scales(functions, self.form, nlp.np, row_scales(ipopt))
         sf = self.form

@@ -61,23 +61,32 @@ def nlpsol_options(ipopt: dict[str, Any] | None, fns: dict[str, ca.Function]) ->
     return opts
 
 
+def evaluated(nlp: Graph) -> dict[str, ca.Function]:
+    """The Functions IPOPT evaluates (:data:`~ocgroupoid.nlp.jit.NLP_FUNCTIONS`): the
+    assembled derivatives, and f and g as Functions of their own, to be compiled with them."""
+    x, p = nlp.nlp["x"], nlp.nlp["p"]
+    return {**nlp.functions,
+            "nlp_f": ca.Function("nlp_f", [x, p], [nlp.nlp["f"]], ["x", "p"], ["f"]),
+            "nlp_g": ca.Function("nlp_g", [x, p], [nlp.nlp["g"]], ["x", "p"], ["g"])}
+
+
 class IpoptBackend(Backend):
-    """IPOPT for one NLP (module docstring); ``jit`` compiles its Functions."""
+    """IPOPT for one NLP (module docstring); ``jit`` compiles its Functions, unless they are
+    given ``compiled`` already (:func:`evaluated`, compiled beside fatrop's)."""
 
     name = "ipopt"
 
-    def __init__(self, nlp: Graph, options: SolverOptions, jit: bool = False) -> None:
+    def __init__(self, nlp: Graph, options: SolverOptions, jit: bool = False,
+                 compiled_functions: dict[str, ca.Function] | None = None) -> None:
         self.nx, self.ng, self.np = nlp.nx, nlp.ng, nlp.np
         self.function_name, self.nlp, self.bounds = \
             nlp.function_name, nlp.nlp, nlp.bounds_function
-        fns = dict(nlp.functions)
-        self.options = nlpsol_options(options.run_ipopt, fns)
+        self.options = nlpsol_options(options.run_ipopt, nlp.functions)
         t0 = time.perf_counter()
-        if jit:
-            x, p = self.nlp["x"], self.nlp["p"]
-            fns["nlp_f"] = ca.Function("nlp_f", [x, p], [self.nlp["f"]], ["x", "p"], ["f"])
-            fns["nlp_g"] = ca.Function("nlp_g", [x, p], [self.nlp["g"]], ["x", "p"], ["g"])
-            self.options["cache"], self.jit_compiled = compiled(fns)
+        if compiled_functions is not None:
+            self.options["cache"] = compiled_functions
+        elif jit:
+            (self.options["cache"],), self.jit_compiled = compiled(evaluated(nlp))
         #: the compilation of jit (or the load from its cache)
         self.jit_seconds = time.perf_counter() - t0
         t0 = time.perf_counter()
