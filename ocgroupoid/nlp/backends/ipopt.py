@@ -72,7 +72,7 @@ def evaluated(nlp: Graph) -> dict[str, ca.Function]:
 
 class IpoptBackend(Backend):
     """IPOPT for one NLP (module docstring); ``jit`` compiles its Functions, unless they are
-    given ``compiled`` already (:func:`evaluated`, compiled beside fatrop's)."""
+    given as ``compiled_functions`` (:func:`evaluated`, compiled beside fatrop's)."""
 
     name = "ipopt"
 
