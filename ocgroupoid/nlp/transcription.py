@@ -58,9 +58,8 @@ class Transcription(NonlinearProgram):
                  options: SolverOptions | None = None) -> None:
         t0 = time.perf_counter()
         options = options if options is not None else SolverOptions()
-        # fatrop's and IPOPT's compiled Functions share the stages' (backends.build)
-        super().__init__(problem, method, Derivatives(
-            lagrangian=options.jit and options.backend == FatropBackend.name))
+        super().__init__(problem, method,
+                         Derivatives(lagrangian=backends.compiled_together(options)))
         self.options = options
         #: compiled evaluation (:mod:`~ocgroupoid.nlp.jit`), and the backend's name
         self.jit, self.backend = options.jit, options.backend

@@ -10,6 +10,13 @@ from .ipopt import DEFAULT_IPOPT, IpoptBackend, evaluated, ipopt_options
 from .policy import in_turn
 
 
+def compiled_together(options: SolverOptions) -> bool:
+    """Whether IPOPT's Functions are compiled beside fatrop's, in one library (fatrop with
+    ``jit``): the NLP's assemblies then take every stage Hessian from the stage Lagrangian's
+    Function (:class:`~ocgroupoid.nlp.assembly.Derivatives`), which both call."""
+    return options.jit and options.backend == FatropBackend.name
+
+
 def build(nlp: Graph, options: SolverOptions) -> list[Backend]:
     """The backends a solve of ``nlp`` runs in turn (:func:`in_turn`): IPOPT; or fatrop,
     then IPOPT from the same start when fatrop fails, or from its point when it stopped near
@@ -17,10 +24,11 @@ def build(nlp: Graph, options: SolverOptions) -> list[Backend]:
     once: ``nlp.derivatives`` with the Lagrangian's Hessian for both)."""
     if options.backend == FatropBackend.name:
         fatrop = FatropBackend(nlp, options, options.jit,
-                               evaluated(nlp) if options.jit else None)
+                               evaluated(nlp) if compiled_together(options) else None)
         return [fatrop, IpoptBackend(nlp, options, compiled_functions=fatrop.compiled_beside)]
     return [IpoptBackend(nlp, options, options.jit)]
 
 
 __all__ = ["Backend", "Graph", "Run", "Start", "IpoptBackend", "FatropBackend", "build",
-           "in_turn", "ipopt_options", "DEFAULT_IPOPT", "TIMED_OUT", "INTERRUPTED"]
+           "compiled_together", "in_turn", "ipopt_options", "DEFAULT_IPOPT", "TIMED_OUT",
+           "INTERRUPTED"]
