@@ -82,11 +82,13 @@ def test_an_interrupted_run_keeps_its_finished_rows(tmp_path: Path, monkeypatch)
     (["--schemes", "order3"], "unknown scheme 'order3'"),
     (["--schemes", "order2:cubic"], "unknown retraction 'cubic'"),
     (["--schemes", "order2@snopt"], "unknown backend 'snopt'"),
+    (["--schemes", "order4+coarse+jit"], "in this order"),
+    (["--schemes", "order4+fast"], "may end with +jit, +coarse"),
     (["--N", "1,8"], "N must be at least 2"),
     (["--N", "8,x"], "is not a comma-separated list of integers"),
     (["--reference-N", "100"], "power of two"),
     (["--repeats", "0"], "--repeats must be at least 1"),
-], ids=["scheme", "retraction", "backend", "N", "N-text", "reference-N", "repeats"])
+], ids=["scheme", "retraction", "backend", "flag-order", "flag", "N", "N-text", "reference-N", "repeats"])
 def test_bad_input_exits_2_with_the_option_named(tmp_path: Path, args: list[str],
                                                  message: str) -> None:
     r = runner.invoke(app, ["bench", "work-precision", str(SO3), "--out", str(tmp_path), *args])
@@ -262,3 +264,31 @@ def test_a_timed_solve_is_held_to_max_seconds_and_a_failed_one_is_not_repeated(
     assert stopped.solution.status == "Maximum_WallTime_Exceeded" and len(stopped.seconds) == 1
     solved = timed_solve(problem, method, 256, setting, repeats=3)
     assert solved.solution.status == "Solve_Succeeded" and len(solved.seconds) >= 3
+
+
+def test_a_coarse_method_solves_a_quarter_of_the_grid_first() -> None:
+    """``+coarse``: the solve of a row on N is a solve on N/4 from the row's start and one on
+    N from that solution, interpolated (``solver.continuation: [N/4]`` of the compiled
+    problem); the coarse run is listed first, the time counts both, and it lands where the
+    cold solve lands. Below a coarse grid of 8 the method solves cold."""
+    from ocgroupoid.bench.methods import Method, parse_methods
+    from ocgroupoid.bench.timing import Setting, timed_solve
+    (method,) = parse_methods("order4@fatrop+jit+coarse", ())
+    assert method == Method("order4", "cayley", "fatrop", True, True)
+    assert method.label == "order4@fatrop+jit+coarse"
+    assert [method.coarse_N(N) for N in (16, 31, 32, 128)] == [None, None, 8, 32]
+    assert method.options({}, N=64).continuation == (16,)
+    assert method.options({}, N=16).continuation == ()
+    assert Method("order4").coarse_N(128) is None
+    cfg = files.load(ROOT / "problems" / "plate_ball_rotating.yaml")
+    problem, setting = files.build(cfg), Setting.of(cfg.file)
+    coarse = timed_solve(problem, Method("order4", coarse=True), 32, setting, repeats=1)
+    cold = timed_solve(problem, Method("order4"), 32, setting, repeats=1)
+    runs = coarse.solution.diagnostics["runs"]
+    assert [r["backend"] for r in runs] == ["ipopt on N=8", "ipopt"]
+    assert all(r["status"] == "Solve_Succeeded" for r in runs)
+    assert runs[1]["iterations"] < cold.solution.iterations  # it starts near the solution
+    assert coarse.solution.cost == pytest.approx(cold.solution.cost, rel=1e-8)
+    assert coarse.solution.success and coarse.solution.solve_seconds > 0
+    alone = timed_solve(problem, Method("order4", coarse=True), 16, setting, repeats=1)
+    assert [r["backend"] for r in alone.solution.diagnostics["runs"]] == ["ipopt"]

@@ -32,11 +32,15 @@ NAMES = {"order2": "ours: order2 (cayley)", "order4": "ours: order4 (cayley)",
          "rk4_euler": "RK4 shooting, ZYX Euler angles"}
 #: a method run with another backend or compiled (``order4@fatrop+jit``): a shade of its
 #: scheme's colour and a marker of its own
-SHADES = {"order2": {"+jit": "navy", "@fatrop": "deepskyblue", "@fatrop+jit": "darkviolet"},
+SHADES = {"order2": {"+jit": "navy", "@fatrop": "deepskyblue", "@fatrop+jit": "darkviolet",
+                     "@fatrop+jit+coarse": "slateblue"},
           "order4": {"+jit": "darkgreen", "@fatrop": "yellowgreen",
-                     "@fatrop+jit": "saddlebrown"},
-          "rk4_quat": {"+jit": "darkred", "@fatrop": "salmon", "@fatrop+jit": "maroon"}}
-VARIANT_MARKERS = {"+jit": "D", "@fatrop": "v", "@fatrop+jit": "*"}
+                     "@fatrop+jit": "saddlebrown", "+jit+coarse": "teal",
+                     "@fatrop+jit+coarse": "darkorange"},
+          "rk4_quat": {"+jit": "darkred", "@fatrop": "salmon", "@fatrop+jit": "maroon",
+                       "+jit+coarse": "deeppink"}}
+VARIANT_MARKERS = {"+jit": "D", "@fatrop": "v", "@fatrop+jit": "*", "+jit+coarse": "p",
+                   "@fatrop+jit+coarse": "P"}
 
 
 def save_png(fig: Any, path: Path, dpi: int) -> Path:

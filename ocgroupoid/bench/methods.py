@@ -1,10 +1,12 @@
 """What a benchmark compares: a scheme with a retraction (``order2:exp``), and the grids.
 
-A method is written ``SCHEME[:RETRACTION][@BACKEND][+jit]`` (``order2``, ``order4:exp``,
-``rk4_quat``, ``order4@fatrop+jit``); the retraction defaults to cayley and is ignored by
-the RK4 baselines, which integrate the continuous dynamics in their own coordinates; the
-backend (``solver.backend``) defaults to ipopt, and ``+jit`` compiles the evaluations
-(``solver.jit``).
+A method is written ``SCHEME[:RETRACTION][@BACKEND][+jit][+coarse]`` (``order2``,
+``order4:exp``, ``rk4_quat``, ``order4@fatrop+jit``, ``order4@fatrop+jit+coarse``); the
+retraction defaults to cayley and is ignored by the RK4 baselines, which integrate the
+continuous dynamics in their own coordinates; the backend (``solver.backend``) defaults to
+ipopt, ``+jit`` compiles the evaluations (``solver.jit``), and ``+coarse`` solves on N /
+:data:`COARSE_FACTOR` intervals first and on N from that solution, interpolated
+(``solver.continuation: [N/4]``; :meth:`Method.coarse_N`).
 """
 
 from __future__ import annotations
@@ -22,6 +24,17 @@ from ..nlp.options import BACKENDS, DEFAULT_BACKEND, MAX_SECONDS, SolverOptions
 from ..nlp.schemes import BASELINES, DEFAULT_RULE, SCHEME_NAMES
 from ..nlp.schemes.coordinates import coordinates
 
+#: a ``+coarse`` method on N intervals solves on N / COARSE_FACTOR first (plate_ball,
+#: order4@fatrop+jit from its geodesic, N = 32, 64, 128: 37, 29, 42 iterations cold, 16, 26,
+#: 76 ms; 50, 48, 37 iterations on N / 4 and 6, 5, 4 on N, 11, 18, 26 ms in all; N / 2: 15,
+#: 22, 36 ms; N / 8: 8, 14, 23 ms, but the heavy top's N = 4 found another minimum than its
+#: N = 32's)
+COARSE_FACTOR = 4
+#: the coarsest grid a ``+coarse`` method solves first; below it the method solves cold
+COARSE_MIN = 8
+#: the flags a method's label may end with, in this order
+FLAGS = ("jit", "coarse")
+
 
 @dataclass(frozen=True)
 class Method:
@@ -31,6 +44,8 @@ class Method:
     retraction: str = DEFAULT_RETRACTION
     backend: str = DEFAULT_BACKEND
     jit: bool = False
+    #: solved on :meth:`coarse_N` intervals first, then on N from that solution
+    coarse: bool = False
 
     @property
     def baseline(self) -> bool:
@@ -43,7 +58,13 @@ class Method:
         name = self.scheme if self.baseline or self.retraction == DEFAULT_RETRACTION else \
             f"{self.scheme}:{self.retraction}"
         return name + ("" if self.backend == DEFAULT_BACKEND else f"@{self.backend}") + \
-            ("+jit" if self.jit else "")
+            ("+jit" if self.jit else "") + ("+coarse" if self.coarse else "")
+
+    def coarse_N(self, N: int) -> int | None:
+        """The grid solved first on N intervals: N / :data:`COARSE_FACTOR` for a ``+coarse``
+        method when that is at least :data:`COARSE_MIN`, else None (solved cold)."""
+        n = N // COARSE_FACTOR
+        return n if self.coarse and n >= COARSE_MIN else None
 
     @staticmethod
     def split(label: str) -> tuple[str, str]:
@@ -62,11 +83,15 @@ class Method:
         return Discretisation(N, scheme=self.scheme, retraction=self.retraction,
                               rule=self.rule(file_rule), steps=steps)
 
-    def options(self, ipopt: dict[str, Any], max_seconds: float = MAX_SECONDS) -> SolverOptions:
-        """The solver options of this method: its backend and jit, IPOPT's ``ipopt``, the
-        wall time of one run."""
+    def options(self, ipopt: dict[str, Any], max_seconds: float = MAX_SECONDS,
+                N: int | None = None) -> SolverOptions:
+        """The solver options of this method on N intervals: its backend and jit, IPOPT's
+        ``ipopt``, the wall time of one run, and for ``+coarse`` the continuation from
+        :meth:`coarse_N` (what a solve of the compiled problem does; the timed solves of
+        :mod:`~ocgroupoid.bench.timing` take the same two steps)."""
+        n = None if N is None else self.coarse_N(N)
         return SolverOptions(backend=self.backend, ipopt=dict(ipopt), jit=self.jit,
-                             max_seconds=max_seconds)
+                             max_seconds=max_seconds, continuation=() if n is None else (n,))
 
 
 #: ours with cayley and exp, then the baselines
@@ -83,7 +108,11 @@ def parse_methods(text: str | None, default: tuple[Method, ...]) -> list[Method]
         return list(default)
     methods = []
     for item in (s.strip() for s in text.split(",")):
-        head, jit = (item[:-4], True) if item.endswith("+jit") else (item, False)
+        head, *flags = item.split("+")
+        if flags != [f for f in FLAGS if f in flags]:
+            raise ConfigError(f"--schemes: {item!r} ends with +{'+'.join(flags)}; a method "
+                              f"may end with {', '.join('+' + f for f in FLAGS)}, in this "
+                              "order (order4@fatrop+jit+coarse)")
         head, _, backend = head.partition("@")
         backend = backend or DEFAULT_BACKEND
         if backend not in BACKENDS:
@@ -98,7 +127,7 @@ def parse_methods(text: str | None, default: tuple[Method, ...]) -> list[Method]
         if retraction not in RETRACTION_NAMES:
             raise ConfigError(f"--schemes: unknown retraction {retraction!r} in {item!r}; "
                               f"choose from {', '.join(RETRACTION_NAMES)}")
-        methods.append(Method(scheme, retraction, backend, jit))
+        methods.append(Method(scheme, retraction, backend, "jit" in flags, "coarse" in flags))
     if len(set(methods)) != len(methods):
         raise ConfigError(f"--schemes names a method twice: {text!r}")
     return methods

@@ -4,8 +4,11 @@ The NLP is built once (not timed, :class:`Trial`); it is then solved ``repeats``
 the same guess (a geodesic, or the multi-start guess labelled ``start`` that found the
 reference's minimum) without an iteration callback, more often when it is fast (until the
 runs add up to :data:`MIN_SECONDS`, at most :data:`MAX_REPEATS`), and the median of its wall
-times is the row's time. The solves run back to back (:func:`timed_solve`) or in rounds with
-other methods and grids (:func:`interleaved`, what the work-precision benchmark does).
+times is the row's time. A ``+coarse`` method's solve is two (:meth:`Method.coarse_N`): from
+the start on the coarse grid, then on N from that solution interpolated (from the start
+when the coarse grid failed), and its time is both's. The solves run back to back
+(:func:`timed_solve`) or in rounds with other methods and grids (:func:`interleaved`, what
+the work-precision benchmark does).
 A run's time is what the caller of the built NLP waits for
 (:meth:`~ocgroupoid.nlp.transcription.Transcription.solve`, the wall time around it): the
 start point of the guess, the backend's arguments and, for fatrop, the way to its helper
@@ -24,16 +27,19 @@ from __future__ import annotations
 
 import statistics
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Callable, TypeVar
+
+import numpy as np
 
 from ..errors import OcgError
 from ..files.schema import ProblemFile
 from ..model.problem import Problem
 from ..nlp.method import DEFAULT_STEPS
 from ..nlp.options import MAX_SECONDS
-from ..nlp.transcription import Guess, RawResult
+from ..nlp.transcription import Guess, RawResult, Transcription
 from ..solve import CompiledProblem, Solution, compile_problem, distinct_minima, make_solution
+from ..solve.guesses import interpolate
 from .methods import Method
 
 MIN_SECONDS = 0.25  # a solve faster than this is repeated until the repeats add up to it,
@@ -60,7 +66,7 @@ class Setting:
     def compile(self, problem: Problem, method: Method, N: int) -> CompiledProblem:
         """``method`` compiled on N intervals in this setting."""
         return compile_problem(problem, method.on(N, self.rule, self.steps),
-                               method.options(self.ipopt, self.max_seconds))
+                               method.options(self.ipopt, self.max_seconds, N))
 
 
 @dataclass
@@ -102,10 +108,12 @@ class Trial:
     def __init__(self, problem: Problem, method: Method, N: int, setting: Setting,
                  start: str | None = None) -> None:
         t0 = time.perf_counter()
-        solver = setting.compile(problem, method, N)
-        self.tr, self.ipopt = solver.transcription, setting.ipopt
-        self.p = self.tr.pack()
-        self.guess = cold_start(solver.guesses(self.tr, self.p, start is not None), start)
+        self.tr, self.p, self.guess = _built(problem, method, N, setting, start)
+        self.ipopt = setting.ipopt
+        n = method.coarse_N(N)
+        #: the coarse grid solved first (``+coarse``): its NLP, parameters and start
+        self.coarse = None if n is None else \
+            _built(problem, replace(method, coarse=False), n, setting, start)
         self.build_seconds = time.perf_counter() - t0
         #: the wall time of every solve so far, and the last solve's result
         self.seconds: list[float] = []
@@ -128,11 +136,25 @@ class Trial:
         is kept in :attr:`error`)."""
         t0 = time.perf_counter()
         try:
-            self.last = self.tr.solve(self.guess, self.p)
+            self.last = self._solve()
         except OcgError as e:
             self.error = e
             return
         self.seconds.append(time.perf_counter() - t0)
+
+    def _solve(self) -> RawResult:
+        """From the cold start, or through the coarse grid (module docstring): the coarse
+        run is listed first among the runs before the last (``diagnostics["runs"]``)."""
+        if self.coarse is None:
+            return self.tr.solve(self.guess, self.p)
+        tr, p, guess = self.coarse
+        deadline = time.monotonic() + self.tr.max_seconds  # both runs' time
+        first = tr.solve(guess, p, deadline=deadline)
+        start = interpolate(tr, first.x, first.p, self.tr.N) if first.success else self.guess
+        r = self.tr.solve(start, self.p, deadline=deadline)
+        return replace(r, solve_seconds=first.solve_seconds + r.solve_seconds,
+                       earlier=((f"{first.backend} on N={tr.N}", first.status,
+                                 first.iterations), *r.earlier))
 
     def timed(self) -> Timed:
         """The last solve read out and diagnosed, with the times of all (after a run);
@@ -142,6 +164,15 @@ class Trial:
         assert self.last is not None, "a trial is timed after a solve"
         sol = make_solution(self.tr, self.last, distinct_minima([self.last]), True, self.ipopt)
         return Timed(sol, self.seconds, self.build_seconds, self.guess.label)
+
+
+def _built(problem: Problem, method: Method, N: int, setting: Setting, start: str | None
+           ) -> tuple[Transcription, np.ndarray, Guess]:
+    """``method``'s NLP on N intervals, its parameters and its cold start."""
+    solver = setting.compile(problem, method, N)
+    tr = solver.transcription
+    p = tr.pack()
+    return tr, p, cold_start(solver.guesses(tr, p, start is not None), start)
 
 
 def timed_solve(problem: Problem, method: Method, N: int, setting: Setting, repeats: int,
