@@ -68,6 +68,19 @@ def best_headlines() -> str:
                                             "rk4_quat+jit" for level in levels)], rows)
 
 
+def best_coarse_headlines() -> str:
+    """Landing of the best configurations against the shooting compiled and solved on N/4
+    first (``rk4_quat+jit+coarse``), at 1e-4, 1e-6 and 1e-8, with our fastest named; the
+    files whose best run had no such baseline are left out."""
+    d = _json("work_precision.json")
+    levels = ("1e-04", "1e-06", "1e-08")
+    rows = [[f"`{p}`", *(_ratio(e["best"]["landing_vs_jit_coarse"].get(lv), level=False)
+                         for lv in levels)]
+            for p, e in d.items() if e.get("best", {}).get("landing_vs_jit_coarse")]
+    return table(["problem", *(f"landing {level.replace('e-0', 'e-')}: vs rk4_quat+jit+coarse"
+                               for level in levels)], rows)
+
+
 def _iterations(row: dict[str, str]) -> str:
     """A row's iterations: every run's, and who ran when it was more than one backend
     (``163: ipopt polish after fatrop``); rows measured before runs were counted give the
@@ -178,6 +191,7 @@ def rockit() -> str:
 #: the markers a page may hold, ``<!-- generated: NAME -->``, and what fills them
 RENDERERS: dict[str, Callable[[], str]] = {
     "bench-headlines": headlines, "bench-best-headlines": best_headlines,
+    "bench-best-coarse-headlines": best_coarse_headlines,
     "bench-work-precision-rows": work_precision_rows, "bench-stability": stability,
     "bench-so3-build": so3_build, "bench-backends": backends, "bench-codegen": codegen,
     "bench-drift": drift, "bench-sweep": sweep, "bench-rockit": rockit}

@@ -24,6 +24,10 @@ WP_COLUMNS = ("run", "method", "N", "success", "iterations", "iterations_all", "
               "seconds", "cost_error", "replay_error")
 #: the landing accuracies at which the best configurations are set against rk4_quat+jit
 LANDING_LEVELS = (1e-4, 1e-6, 1e-8)
+#: the baselines the best configurations' landing is set against there, and their keys: the
+#: shooting compiled, and compiled and solved on N/4 first (``+coarse``)
+LANDING_BASELINES = {"landing_vs_jit": "rk4_quat+jit",
+                     "landing_vs_jit_coarse": "rk4_quat+jit+coarse"}
 #: each table's input in the results folder: an extract runs when its input is there
 INPUTS = {"work_precision": "work_precision", "stability": "stability/so3.json",
           "so3_build": "bench_so3.json", "backends": "bench_backends.json",
@@ -91,9 +95,12 @@ def work_precision(results: Path, data: Path) -> dict[str, Any]:
                 entry[run]["vs_jit"] = {
                     kind: _headline(_at_level(jit.get(kind, []), head[kind]["level"]))
                     for kind in ("cost_error", "replay_error") if head.get(kind)}
-                entry[run]["landing_vs_jit"] = {
-                    f"{level:.0e}": _headline(_at_level(jit.get("replay_error", []), level))
-                    for level in LANDING_LEVELS}
+            for key, baseline in LANDING_BASELINES.items():
+                if against := summary.get(f"equal_accuracy_{baseline}"):
+                    entry[run][key] = {
+                        f"{level:.0e}": _headline(_at_level(against.get("replay_error", []),
+                                                            level))
+                        for level in LANDING_LEVELS}
             entry[run]["created"] = summary.get("created")
             entry[run]["reference"] = summary["reference"]["cost"]
             rows += [{"run": run, **r} for r in summary["rows"] if r.get("kind") == "row"]

@@ -84,11 +84,13 @@ def test_an_interrupted_run_keeps_its_finished_rows(tmp_path: Path, monkeypatch)
     (["--schemes", "order2@snopt"], "unknown backend 'snopt'"),
     (["--schemes", "order4+coarse+jit"], "in this order"),
     (["--schemes", "order4+fast"], "may end with +jit, +coarse"),
+    (["--schemes", "order4+coarse", "--N", "8,16"], "no --N of at least 32"),
     (["--N", "1,8"], "N must be at least 2"),
     (["--N", "8,x"], "is not a comma-separated list of integers"),
     (["--reference-N", "100"], "power of two"),
     (["--repeats", "0"], "--repeats must be at least 1"),
-], ids=["scheme", "retraction", "backend", "flag-order", "flag", "N", "N-text", "reference-N", "repeats"])
+], ids=["scheme", "retraction", "backend", "flag-order", "flag", "coarse-N", "N", "N-text",
+        "reference-N", "repeats"])
 def test_bad_input_exits_2_with_the_option_named(tmp_path: Path, args: list[str],
                                                  message: str) -> None:
     r = runner.invoke(app, ["bench", "work-precision", str(SO3), "--out", str(tmp_path), *args])
@@ -264,6 +266,19 @@ def test_a_timed_solve_is_held_to_max_seconds_and_a_failed_one_is_not_repeated(
     assert stopped.solution.status == "Maximum_WallTime_Exceeded" and len(stopped.seconds) == 1
     solved = timed_solve(problem, method, 256, setting, repeats=3)
     assert solved.solution.status == "Solve_Succeeded" and len(solved.seconds) >= 3
+
+
+def test_a_coarse_method_has_rows_where_it_has_a_coarse_grid(tmp_path: Path) -> None:
+    """A ``+coarse`` row below N = 32 would time the plain method's cold solve a second time
+    (and the fastest of two timings of one solve would be taken as ours): it has none."""
+    r = runner.invoke(app, ["bench", "work-precision", str(SO3), "--out", str(tmp_path), "-q",
+                            "--schemes", "order4,order4+coarse", "--N", "16,32",
+                            "--repeats", "1", "--reference-N", "64"])
+    assert r.exit_code == 0, r.output
+    rows = read_rows(tmp_path / "work_precision" / "so3_rest_to_rest.jsonl")[1:]
+    assert [(x["method"], x["N"]) for x in rows] == [("order4", 16), ("order4", 32),
+                                                     ("order4+coarse", 32)]
+    assert rows[2]["iterations_all"] > rows[2]["iterations"]  # N = 8 first
 
 
 def test_a_coarse_method_solves_a_quarter_of_the_grid_first() -> None:

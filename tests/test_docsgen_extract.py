@@ -52,6 +52,7 @@ def test_a_best_run_replaces_its_rows_and_keeps_the_schemes_run(tmp_path: Path) 
     landing = best["landing_vs_jit"]
     assert landing["1e-04"]["ratio"] == 2.0 and landing["1e-06"]["ratio"] == 3.0
     assert landing["1e-08"] is None  # the run did not reach it: no number made up
+    assert "landing_vs_jit_coarse" not in best  # the run had no rk4_quat+jit+coarse
     rows = _rows(data / "work_precision" / "so3.csv")
     assert [(r["run"], r["method"]) for r in rows] == [("schemes", "old"),
                                                        ("best", "order4@fatrop+jit")]
@@ -66,3 +67,19 @@ def test_main_keeps_the_tables_whose_results_are_missing(tmp_path: Path, capsys:
     extract.main([str(results), str(data)])
     assert (data / "sweep.json").read_text() == "{}"
     assert "sweep: kept" in capsys.readouterr().out
+
+
+def test_a_best_run_with_the_coarse_baseline_is_set_against_it_too(tmp_path: Path) -> None:
+    results, data = tmp_path / "results", tmp_path / "data"
+    (results / "work_precision").mkdir(parents=True)
+    summary = _summary({1e-4: 2.0}, 0.5)
+    summary["equal_accuracy_rk4_quat+jit+coarse"] = {"replay_error": [
+        {"level": 1e-6, "ours": "order4@fatrop+jit+coarse", "ratio": 1.5,
+         "lower_bound": False}]}
+    (results / "work_precision" / "so3_backends.json").write_text(json.dumps(summary))
+    best = extract.work_precision(results, data)["so3"]["best"]
+    assert best["landing_vs_jit"]["1e-04"]["ratio"] == 2.0
+    coarse = best["landing_vs_jit_coarse"]
+    assert coarse["1e-06"] == {"level": 1e-6, "ours": "order4@fatrop+jit+coarse",
+                               "ratio": 1.5, "lower_bound": False}
+    assert coarse["1e-04"] is None and coarse["1e-08"] is None

@@ -17,7 +17,8 @@ cost error beyond 1e-2, its path away from the reference's, its cost nearer anot
 the multi-start met) is flagged ``minimum: other`` and left off the chart and the
 comparisons. Every method is built on every N first; then their solves run in rounds, one
 of each per round (:func:`~ocgroupoid.bench.timing.interleaved`), so that a slow phase of
-the machine slows every row alike. Rows go to ``<out>/work_precision/<name>.jsonl`` as they
+the machine slows every row alike. A ``+coarse`` method has rows on the grids with a
+coarse grid only (:func:`method_grids`). Rows go to ``<out>/work_precision/<name>.jsonl`` as they
 are read out after the rounds (an interrupt keeps the reference and the rows read out); the
 summary to ``<name>.json``, the chart to ``<out>/figures/work_precision_<name>.png``.
 """
@@ -34,7 +35,7 @@ from ..model.problem import Problem
 from ..solve import Solution
 from .chart import work_precision_chart
 from .equal_accuracy import compare, headline, lines
-from .methods import Method, redundant
+from .methods import COARSE_FACTOR, COARSE_MIN, Method, redundant
 from .minimum import OTHER_COST, OTHER_PATH, path_deviation, which_minimum
 from .record import Rows, write_summary
 from .reference import STEPS, check_reference_N, reference
@@ -100,6 +101,19 @@ def error_row(method: Method, N: int, error: OcgError) -> dict[str, Any]:
             "minimum": None, "hint": str(error)}
 
 
+def method_grids(method: Method, Ns: list[int]) -> list[int]:
+    """The grids of ``Ns`` a method is timed on: all, and for a ``+coarse`` method those with
+    a coarse grid (:meth:`Method.coarse_N`; on the others it would time the cold solve of the
+    method without ``+coarse`` again). ConfigError when none has."""
+    mine = [N for N in Ns if not method.coarse or method.coarse_N(N) is not None]
+    if not mine:
+        smallest = COARSE_MIN * COARSE_FACTOR
+        raise ConfigError(f"--schemes {method.label}: no --N of at least {smallest} (it "
+                          f"solves N/{COARSE_FACTOR} >= {COARSE_MIN} first); add a finer N "
+                          "or drop +coarse")
+    return mine
+
+
 def check_methods(problem: Problem, methods: list[Method], setting: Setting, N: int) -> None:
     """Build every method once on N intervals: a method that does not apply to the problem
     is a ConfigError naming it, before anything is timed."""
@@ -141,9 +155,10 @@ def work_precision(path: Path, overrides: list[str], out: Path, methods: list[Me
     setting = Setting.of(f)
     skipped = redundant(methods, problem)
     run = [m for m in methods if m.label not in skipped]
+    grids = {m: method_grids(m, Ns) for m in run}
     check_methods(problem, run, setting, min(Ns))
     where = outputs(out, name)
-    total = STEPS + 2 * len(run) * len(Ns) + 1
+    total = STEPS + 2 * sum(map(len, grids.values())) + 1
     done = [0]
 
     def step(what: str) -> None:
@@ -157,7 +172,7 @@ def work_precision(path: Path, overrides: list[str], out: Path, methods: list[Me
         jsonl.append({"kind": "reference", **ref})
         trials: dict[tuple[str, int], Trial | OcgError] = {}
         for m in run:
-            for N in Ns:
+            for N in grids[m]:
                 step(f"build {m.label} N={N}")
                 try:
                     trials[m.label, N] = Trial(problem, m, N, setting, ref["start"])
@@ -168,7 +183,7 @@ def work_precision(path: Path, overrides: list[str], out: Path, methods: list[Me
                     lambda k, n: progress(f"{name}: round {k + 1}, {n} solves", done[0],
                                           total))
         for m in run:
-            for N in Ns:
+            for N in grids[m]:
                 step(f"{m.label} N={N}")
                 trial = trials[m.label, N]
                 if isinstance(trial, OcgError):  # its build failed
