@@ -46,10 +46,11 @@ def work_precision_command(
     out_dir: Path = typer.Option(Path("results"), "--out",
                                  help=OUT_HELP.format(what="work_precision")),
     schemes: Optional[str] = typer.Option(None, "--schemes", help="comma-separated "
-                                          "SCHEME[:RETRACTION][@BACKEND][+jit][+coarse] "
-                                          "(default order2, order4, order2:exp, rk4_quat, "
-                                          "rk4_matrix, rk4_euler; +coarse: solved on N/4 "
-                                          "first)"),
+                                          "methods: a scheme, then optionally :RETRACTION, "
+                                          "@BACKEND, +jit, +coarse (solved on N/4 first), "
+                                          "e.g. order4@fatrop+jit+coarse (default order2, "
+                                          "order4, order2:exp, rk4_quat, rk4_matrix, "
+                                          "rk4_euler)"),
     grids: Optional[str] = typer.Option(None, "--N", help="comma-separated N (default "
                                         "8,16,32,64,128)"),
     repeats: int = typer.Option(3, "--repeats", help="timed IPOPT runs per N (at least; "
@@ -97,9 +98,10 @@ def stability_command(
     out_dir: Path = typer.Option(Path("results"), "--out",
                                  help=OUT_HELP.format(what="stability")),
     schemes: Optional[str] = typer.Option(None, "--schemes", help="comma-separated "
-                                          "SCHEME[:RETRACTION][@BACKEND][+jit][+coarse] "
-                                          "(default order2, order4, order2:exp, "
-                                          "order2:first_order and the three baselines)"),
+                                          "methods: a scheme, then optionally :RETRACTION, "
+                                          "@BACKEND, +jit, +coarse (default order2, order4, "
+                                          "order2:exp, order2:first_order and the three "
+                                          "baselines)"),
     grids: Optional[str] = typer.Option(None, "--N", help="comma-separated N (default "
                                         "2,4,8,16,32,64)"),
     angles: Optional[str] = typer.Option(None, "--angles", help="comma-separated slew "
