@@ -268,6 +268,21 @@ def test_a_timed_solve_is_held_to_max_seconds_and_a_failed_one_is_not_repeated(
     assert solved.solution.status == "Solve_Succeeded" and len(solved.seconds) >= 3
 
 
+def test_every_method_label_parses_back_to_its_method() -> None:
+    """``parse_methods(m.label) == [m]`` for every scheme, retraction, backend and flag."""
+    import itertools
+
+    from ocgroupoid.bench.methods import Method, parse_methods
+    from ocgroupoid.nlp.options import BACKENDS
+    for scheme, retraction, backend, jit, coarse in itertools.product(
+            ("order2", "order4", "rk4_quat"), ("cayley", "exp"), BACKENDS, (False, True),
+            (False, True)):
+        if scheme == "rk4_quat" and retraction != "cayley":
+            continue  # the baselines ignore the retraction: their label has none
+        m = Method(scheme, retraction, backend, jit, coarse)
+        assert parse_methods(m.label, ()) == [m], m.label
+
+
 def test_a_coarse_method_has_rows_where_it_has_a_coarse_grid(tmp_path: Path) -> None:
     """A ``+coarse`` row below N = 32 would time the plain method's cold solve a second time
     (and the fastest of two timings of one solve would be taken as ours): it has none."""
