@@ -9,6 +9,8 @@ from pathlib import Path
 from typing import Any, Callable
 
 DATA = Path(__file__).resolve().parent.parent / "docs" / "benchmarks" / "data"
+#: the landing accuracies of the best configurations' tables, as docsgen.extract keys them
+LANDING_LEVELS = ("1e-04", "1e-06", "1e-08")
 #: the outcome of a stability cell, as one mark
 MARKS = {"converged": "✓", "unverified": "u", "off group": "g", "off target": "t",
          "other minimum": "m", "failed": "✗"}
@@ -52,7 +54,6 @@ def best_headlines() -> str:
     """The same for the best configurations (backends, jit), against rk4_quat with and
     without compiled evaluation; landing against rk4_quat+jit at 1e-4, 1e-6 and 1e-8."""
     d = _json("work_precision.json")
-    levels = ("1e-04", "1e-06", "1e-08")
     rows = []
     for p, e in d.items():
         best = e.get("best")
@@ -62,10 +63,10 @@ def best_headlines() -> str:
         landing = best.get("landing_vs_jit", {})
         rows.append([f"`{p}`", _ratio(best["cost_error"]),
                      _ratio(jit.get("cost_error"), name=False), _ratio(best["replay_error"]),
-                     *(_ratio(landing.get(lv), name=False, level=False) for lv in levels)])
+                     *(_ratio(landing.get(lv), name=False, level=False) for lv in LANDING_LEVELS)])
     return table(["problem", "cost: vs rk4_quat", "cost: vs rk4_quat+jit",
                   "landing: vs rk4_quat", *(f"landing {level.replace('e-0', 'e-')}: vs "
-                                            "rk4_quat+jit" for level in levels)], rows)
+                                            "rk4_quat+jit" for level in LANDING_LEVELS)], rows)
 
 
 def best_coarse_headlines() -> str:
@@ -73,12 +74,11 @@ def best_coarse_headlines() -> str:
     first (``rk4_quat+jit+coarse``), at 1e-4, 1e-6 and 1e-8, with our fastest named; the
     files whose best run had no such baseline are left out."""
     d = _json("work_precision.json")
-    levels = ("1e-04", "1e-06", "1e-08")
     rows = [[f"`{p}`", *(_ratio(e["best"]["landing_vs_jit_coarse"].get(lv), level=False)
-                         for lv in levels)]
+                         for lv in LANDING_LEVELS)]
             for p, e in d.items() if e.get("best", {}).get("landing_vs_jit_coarse")]
     return table(["problem", *(f"landing {level.replace('e-0', 'e-')}: vs rk4_quat+jit+coarse"
-                               for level in levels)], rows)
+                               for level in LANDING_LEVELS)], rows)
 
 
 def _iterations(row: dict[str, str]) -> str:

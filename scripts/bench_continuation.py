@@ -49,6 +49,15 @@ def record(trial: Trial | OcgError) -> dict[str, Any]:
             "iterations": [r["iterations"] for r in sol.diagnostics["runs"]]}
 
 
+def cell(d: dict[str, Any]) -> str:
+    """A record as the table prints it: the iterations of every run and the median ms, with
+    the status when it did not solve."""
+    if "seconds" not in d:
+        return str(d["status"])
+    return f"{' + '.join(map(str, d['iterations']))}, {1e3 * d['seconds']:.1f}" + \
+        ("" if d["status"] == "Solve_Succeeded" else f" ({d['status']})")
+
+
 def chart(rows: list[dict[str, Any]], path: Path) -> Path:
     """The cold time over the coarse-first time, per file, one bar per N."""
     import matplotlib
@@ -117,11 +126,6 @@ def main() -> None:
     table = Table("file", "N", "cold: iterations, ms", "N/4 first: iterations, ms", "ratio",
                   "same minimum")
     for r in rows:
-        def cell(d: dict[str, Any]) -> str:
-            if "seconds" not in d:
-                return d["status"]
-            return f"{' + '.join(map(str, d['iterations']))}, {1e3 * d['seconds']:.1f}" + \
-                ("" if d["status"] == "Solve_Succeeded" else f" ({d['status']})")
         table.add_row(r["file"], str(r["N"]), cell(r["cold"]), cell(r["coarse"]),
                       "-" if r["ratio"] is None else f"{r['ratio']:.2f}x",
                       "yes" if r["same_minimum"] else "no")
