@@ -24,11 +24,16 @@ Step = Callable[[str], None]
 
 def arguments(description: str, out: Path | None,
               out_help: str = "folder for JSON and PNG",
-              quick_help: str = "small sizes and few repeats (CI)") -> argparse.Namespace:
-    """``--out`` (default ``out``) and ``--quick``, parsed from the command line."""
+              quick_help: str = "small sizes and few repeats (CI)",
+              more: Callable[[argparse.ArgumentParser], None] | None = None
+              ) -> argparse.Namespace:
+    """``--out`` (default ``out``) and ``--quick``, and the script's own arguments (``more``
+    adds them to the parser), parsed from the command line."""
     ap = argparse.ArgumentParser(description=description)
     ap.add_argument("--out", type=Path, default=out, help=out_help)
     ap.add_argument("--quick", action="store_true", help=quick_help)
+    if more is not None:
+        more(ap)
     return ap.parse_args()
 
 
