@@ -25,7 +25,7 @@ from ocgroupoid import files
 from ocgroupoid.bench.chart import save_png
 from ocgroupoid.bench.methods import Method
 from ocgroupoid.bench.record import write_summary
-from ocgroupoid.bench.script import arguments, steps
+from ocgroupoid.bench.script import arguments, cell, record, steps
 from ocgroupoid.bench.timing import Setting, Trial, interleaved
 from ocgroupoid.errors import OcgError
 
@@ -34,28 +34,6 @@ COLD = Method("order4", backend="fatrop", jit=True)
 COARSE = Method("order4", backend="fatrop", jit=True, coarse=True)
 NS, REPEATS = (32, 64, 128), 5
 QUICK_FILES, QUICK_NS = ("plate_ball_rotating",), (32,)
-
-
-def record(trial: Trial | OcgError) -> dict[str, Any]:
-    """A trial's median time, iterations of every run, cost and status (or its error)."""
-    if isinstance(trial, OcgError):
-        return {"status": "error", "message": str(trial)}
-    try:
-        timed = trial.timed()
-    except OcgError as e:
-        return {"status": "error", "message": str(e)}
-    sol = timed.solution
-    return {"status": sol.status, "seconds": timed.median, "cost": sol.cost,
-            "iterations": [r["iterations"] for r in sol.diagnostics["runs"]]}
-
-
-def cell(d: dict[str, Any]) -> str:
-    """A record as the table prints it: the iterations of every run and the median ms, with
-    the status when it did not solve."""
-    if "seconds" not in d:
-        return str(d["status"])
-    return f"{' + '.join(map(str, d['iterations']))}, {1e3 * d['seconds']:.1f}" + \
-        ("" if d["status"] == "Solve_Succeeded" else f" ({d['status']})")
 
 
 def chart(rows: list[dict[str, Any]], path: Path) -> Path:

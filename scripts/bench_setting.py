@@ -28,7 +28,7 @@ from ocgroupoid import files
 from ocgroupoid.bench.chart import save_png
 from ocgroupoid.bench.methods import Method
 from ocgroupoid.bench.record import write_summary
-from ocgroupoid.bench.script import arguments, steps
+from ocgroupoid.bench.script import arguments, cell, record, steps
 from ocgroupoid.bench.timing import Setting, Trial, interleaved
 from ocgroupoid.errors import OcgError
 
@@ -44,19 +44,6 @@ def own_arguments(ap: argparse.ArgumentParser) -> None:
     ap.add_argument("--set", action="append", dest="overrides", metavar="KEY=VALUE",
                     help=f"a setting changed, as for ocgroupoid solve (default {DEFAULT_SET[0]})")
     ap.add_argument("--N", default=NS, help=f"intervals, comma-separated (default {NS})")
-
-
-def record(trial: Trial | OcgError) -> dict[str, Any]:
-    """A trial's median time, iterations, cost and status (or its error)."""
-    if isinstance(trial, OcgError):
-        return {"status": "error", "message": str(trial)}
-    try:
-        timed = trial.timed()
-    except OcgError as e:
-        return {"status": "error", "message": str(e)}
-    sol = timed.solution
-    return {"status": sol.status, "seconds": timed.median, "cost": sol.cost,
-            "iterations": sol.iterations}
 
 
 def compared(base: dict[str, Any], changed: dict[str, Any]) -> dict[str, Any]:
@@ -141,9 +128,7 @@ def main() -> None:
     table = Table("file", "method", "N", "as it is: its, ms", "changed: its, ms", "ratio",
                   "same")
     for r in rows:
-        cells = [f"{d['iterations']}, {1e3 * d['seconds']:.1f}" if "seconds" in d
-                 else str(d["status"]) for d in (r["as_it_is"], r["changed"])]
-        table.add_row(r["file"], r["method"], str(r["N"]), *cells,
+        table.add_row(r["file"], r["method"], str(r["N"]), cell(r["as_it_is"]), cell(r["changed"]),
                       "-" if r["ratio"] is None else f"{r['ratio']:.2f}x",
                       "yes" if r["same"] else "no")
     Console().print(table)

@@ -1,5 +1,5 @@
-"""What the benchmark scripts (``scripts/``) share: their command line, a progress bar and
-the rounding of the orders they print.
+"""What the benchmark scripts (``scripts/``) share: their command line, a progress bar, the
+rounding of the orders they print, and what they keep of a timed trial and print of it.
 
 Every script takes ``--out`` (where its JSON and PNG go) and ``--quick`` (small sizes and
 few repeats, for the tests); it writes its JSON with
@@ -12,11 +12,13 @@ from __future__ import annotations
 import argparse
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Callable, Iterator
+from typing import Any, Callable, Iterator
 
 from rich.console import Console
 
+from ..errors import OcgError
 from ..progress import progress_bar
+from .timing import Trial
 
 #: hears the description of every step as it starts
 Step = Callable[[str], None]
@@ -56,3 +58,27 @@ def steps(total: int) -> Iterator[Step]:
 def rounded(values: list[float | None], digits: int = 2) -> list[float | None]:
     """``values`` rounded for printing (None, e.g. an order with no rate to observe, kept)."""
     return [None if v is None else round(v, digits) for v in values]
+
+
+def record(trial: Trial | OcgError) -> dict[str, Any]:
+    """What a benchmark script keeps of a trial (or of the error that stopped its build):
+    its median time, the iterations of every run (a coarse grid's first), cost and status,
+    or the status ``error`` and the message."""
+    if isinstance(trial, OcgError):
+        return {"status": "error", "message": str(trial)}
+    try:
+        timed = trial.timed()
+    except OcgError as e:
+        return {"status": "error", "message": str(e)}
+    sol = timed.solution
+    return {"status": sol.status, "seconds": timed.median, "cost": sol.cost,
+            "iterations": [r["iterations"] for r in sol.diagnostics["runs"]]}
+
+
+def cell(d: dict[str, Any]) -> str:
+    """A record as the table prints it: the iterations of every run and the median ms, with
+    the status when it did not solve."""
+    if "seconds" not in d:
+        return str(d["status"])
+    return f"{' + '.join(map(str, d['iterations']))}, {1e3 * d['seconds']:.1f}" + \
+        ("" if d["status"] == "Solve_Succeeded" else f" ({d['status']})")
