@@ -1,6 +1,7 @@
 """One setting changed: every problem file solved as it is and with ``--set``, in rounds.
 
-For each file in problems/, method (``order4+jit`` and ``rk4_quat+jit``: both run IPOPT,
+For each file in problems/, method (``--methods``, labels as for ``ocgroupoid bench
+work-precision --schemes``; default ``order4+jit`` and ``rk4_quat+jit``: both run IPOPT,
 whose options are the usual subject) and N (``--N``, default 64 and 256): the file as it is
 and the file with the ``--set`` overrides (as ``ocgroupoid solve --set``; default
 ``solver.ipopt.mumps_mem_percent=1000``, IPOPT's own workspace for MUMPS against ours,
@@ -12,7 +13,8 @@ in as many iterations. Writes ``OUT/bench_setting.json`` and the ratios as a cha
 ``OUT/bench_setting.png`` (``--out``, default ``results/``); ``--quick``: so3 at N = 16, one
 solve.
 
-    python scripts/bench_setting.py [--set KEY=VALUE ...] [--N 64,256] [--quick] [--out DIR]
+    python scripts/bench_setting.py [--set KEY=VALUE ...] [--methods M,...] [--N 64,256]
+                                    [--quick] [--out DIR]
 """
 
 from __future__ import annotations
@@ -26,7 +28,7 @@ from rich.table import Table
 
 from ocgroupoid import files
 from ocgroupoid.bench.chart import save_png
-from ocgroupoid.bench.methods import Method
+from ocgroupoid.bench.methods import Method, parse_methods
 from ocgroupoid.bench.record import write_summary
 from ocgroupoid.bench.script import arguments, cell, record, steps
 from ocgroupoid.bench.timing import Setting, Trial, interleaved
@@ -34,15 +36,18 @@ from ocgroupoid.errors import OcgError
 
 ROOT = Path(__file__).resolve().parents[1]
 METHODS = (Method("order4", jit=True), Method("rk4_quat", jit=True))
+METHOD_LABELS = ",".join(m.label for m in METHODS)
 DEFAULT_SET = ["solver.ipopt.mumps_mem_percent=1000"]
 NS, REPEATS = "64,256", 5
 QUICK_FILES, QUICK_NS = ("so3_rest_to_rest",), (16,)
 
 
 def own_arguments(ap: argparse.ArgumentParser) -> None:
-    """``--set`` (repeatable) and ``--N``."""
+    """``--set`` (repeatable), ``--methods`` and ``--N``."""
     ap.add_argument("--set", action="append", dest="overrides", metavar="KEY=VALUE",
                     help=f"a setting changed, as for ocgroupoid solve (default {DEFAULT_SET[0]})")
+    ap.add_argument("--methods", default=METHOD_LABELS,
+                    help=f"methods, comma-separated (default {METHOD_LABELS})")
     ap.add_argument("--N", default=NS, help=f"intervals, comma-separated (default {NS})")
 
 
@@ -89,18 +94,19 @@ def chart(rows: list[dict[str, Any]], overrides: list[str], path: Path) -> Path:
 def main() -> None:
     args = arguments(__doc__.splitlines()[0], ROOT / "results", more=own_arguments)
     overrides = args.overrides or DEFAULT_SET
+    methods = parse_methods(args.methods, METHODS)
     paths = sorted((ROOT / "problems").glob("*.yaml"))
     Ns = QUICK_NS if args.quick else tuple(int(n) for n in args.N.split(","))
     repeats = 1 if args.quick else REPEATS
     if args.quick:
         paths = [p for p in paths if p.stem in QUICK_FILES]
     trials: dict[tuple[str, str, int, bool], Trial | OcgError] = {}
-    with steps(len(paths) * len(METHODS) * len(Ns) * 2 + 1) as step:
+    with steps(len(paths) * len(methods) * len(Ns) * 2 + 1) as step:
         for path in paths:
             for changed in (False, True):
                 cfg = files.load(path, overrides if changed else [])
                 problem, setting = files.build(cfg), Setting.of(cfg.file)
-                for method in METHODS:
+                for method in methods:
                     for N in Ns:
                         step(f"build {path.stem} {method.label} N={N}"
                              + (" changed" if changed else ""))
@@ -113,7 +119,7 @@ def main() -> None:
         interleaved([t for t in trials.values() if isinstance(t, Trial)], repeats)
     rows = []
     for path in paths:
-        for method in METHODS:
+        for method in methods:
             for N in Ns:
                 base, changed = (record(trials[path.stem, method.label, N, c])
                                  for c in (False, True))
@@ -121,7 +127,7 @@ def main() -> None:
                              "as_it_is": base, "changed": changed, **compared(base, changed)})
     args.out.mkdir(parents=True, exist_ok=True)
     write_summary(args.out / "bench_setting.json",
-                  {"overrides": overrides, "methods": [m.label for m in METHODS],
+                  {"overrides": overrides, "methods": [m.label for m in methods],
                    "N": list(Ns), "repeats": repeats, "start": "the file's first guess",
                    "rows": rows})
     chart(rows, overrides, args.out / "bench_setting.png")
