@@ -1,8 +1,8 @@
 """One setting changed: every problem file solved as it is and with ``--set``, in rounds.
 
-For each file in problems/, method (``--methods``, labels as for ``ocgroupoid bench
-work-precision --schemes``; default ``order4+jit`` and ``rk4_quat+jit``: both run IPOPT,
-whose options are the usual subject) and N (``--N``, default 64 and 256): the file as it is
+For each file in problems/, method (``--schemes``, as for ``ocgroupoid bench
+work-precision``; default ``order4+jit`` and ``rk4_quat+jit``: both run IPOPT, whose
+options are the usual subject) and N (``--N``, default 64 and 256): the file as it is
 and the file with the ``--set`` overrides (as ``ocgroupoid solve --set``; default
 ``solver.ipopt.mumps_mem_percent=1000``, IPOPT's own workspace for MUMPS against ours,
 :data:`~ocgroupoid.nlp.backends.ipopt.DEFAULT_IPOPT`), built first and then solved from the
@@ -13,7 +13,7 @@ in as many iterations. Writes ``OUT/bench_setting.json`` and the ratios as a cha
 ``OUT/bench_setting.png`` (``--out``, default ``results/``); ``--quick``: so3 at N = 16, one
 solve.
 
-    python scripts/bench_setting.py [--set KEY=VALUE ...] [--methods M,...] [--N 64,256]
+    python scripts/bench_setting.py [--set KEY=VALUE ...] [--schemes M,...] [--N 64,256]
                                     [--quick] [--out DIR]
 """
 
@@ -32,7 +32,7 @@ from ocgroupoid.bench.methods import Method, parse_methods
 from ocgroupoid.bench.record import write_summary
 from ocgroupoid.bench.script import arguments, cell, record, steps
 from ocgroupoid.bench.timing import Setting, Trial, interleaved
-from ocgroupoid.errors import OcgError
+from ocgroupoid.errors import ConfigError, OcgError
 
 ROOT = Path(__file__).resolve().parents[1]
 METHODS = (Method("order4", jit=True), Method("rk4_quat", jit=True))
@@ -43,10 +43,10 @@ QUICK_FILES, QUICK_NS = ("so3_rest_to_rest",), (16,)
 
 
 def own_arguments(ap: argparse.ArgumentParser) -> None:
-    """``--set`` (repeatable), ``--methods`` and ``--N``."""
+    """``--set`` (repeatable), ``--schemes`` and ``--N``."""
     ap.add_argument("--set", action="append", dest="overrides", metavar="KEY=VALUE",
                     help=f"a setting changed, as for ocgroupoid solve (default {DEFAULT_SET[0]})")
-    ap.add_argument("--methods", default=METHOD_LABELS,
+    ap.add_argument("--schemes", default=METHOD_LABELS,
                     help=f"methods, comma-separated (default {METHOD_LABELS})")
     ap.add_argument("--N", default=NS, help=f"intervals, comma-separated (default {NS})")
 
@@ -91,20 +91,39 @@ def chart(rows: list[dict[str, Any]], overrides: list[str], path: Path) -> Path:
     return save_png(fig, path, 110)
 
 
+def grid(text: str) -> tuple[int, ...]:
+    """``--N``: whole numbers > 0, comma-separated; ConfigError otherwise."""
+    try:
+        Ns = tuple(int(n) for n in text.split(","))
+    except ValueError:
+        Ns = ()
+    if not Ns or min(Ns) < 1:
+        raise ConfigError(f"--N takes whole numbers > 0 separated by commas, e.g. {NS}; got "
+                          f"{text!r}")
+    return Ns
+
+
 def main() -> None:
     args = arguments(__doc__.splitlines()[0], ROOT / "results", more=own_arguments)
     overrides = args.overrides or DEFAULT_SET
-    methods = parse_methods(args.methods, METHODS)
     paths = sorted((ROOT / "problems").glob("*.yaml"))
-    Ns = QUICK_NS if args.quick else tuple(int(n) for n in args.N.split(","))
-    repeats = 1 if args.quick else REPEATS
     if args.quick:
         paths = [p for p in paths if p.stem in QUICK_FILES]
+    repeats = 1 if args.quick else REPEATS
+    try:  # every input checked before anything is built
+        methods = parse_methods(args.schemes, METHODS)
+        Ns = QUICK_NS if args.quick else grid(args.N)
+        configs = {(path, changed): files.load(path, overrides if changed else [])
+                   for path in paths for changed in (False, True)}
+    except OcgError as e:
+        Console(stderr=True).print(f"bench_setting: {e}", markup=False, highlight=False,
+                                   soft_wrap=True)
+        raise SystemExit(2) from None
     trials: dict[tuple[str, str, int, bool], Trial | OcgError] = {}
     with steps(len(paths) * len(methods) * len(Ns) * 2 + 1) as step:
         for path in paths:
             for changed in (False, True):
-                cfg = files.load(path, overrides if changed else [])
+                cfg = configs[path, changed]
                 problem, setting = files.build(cfg), Setting.of(cfg.file)
                 for method in methods:
                     for N in Ns:

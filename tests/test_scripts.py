@@ -23,3 +23,22 @@ def test_script_runs_quick(script: Path, tmp_path) -> None:
     for f in outputs:
         json.loads(f.read_text())
     assert list(tmp_path.glob("*.png")), "no PNG written"
+
+
+@pytest.mark.parametrize("args, says", [
+    (["--set", "solver.ipopt.mumps_mem_percent=abc"], "mumps_mem_percent"),
+    (["--set", "horizon.no_such_key=1"], "no_such_key"),
+    (["--schemes", "order9"], "unknown scheme 'order9'"),
+    (["--N", "64,x"], "--N takes whole numbers"),
+    (["--N", "0"], "--N takes whole numbers"),
+])
+def test_bench_setting_refuses_bad_input_in_one_line(args: list[str], says: str,
+                                                     tmp_path: Path) -> None:
+    """Every input is checked before anything is built: one line naming it, exit 2, no
+    traceback and nothing written."""
+    script = next(p for p in SCRIPTS if p.stem == "bench_setting")
+    r = subprocess.run([sys.executable, str(script), *args, "--out", str(tmp_path)],
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2, r.stdout + r.stderr
+    assert says in r.stderr and "Traceback" not in r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1 and not list(tmp_path.iterdir())

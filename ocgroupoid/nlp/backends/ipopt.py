@@ -37,9 +37,9 @@ DEFAULT_IPOPT: dict[str, Any] = {
     "bound_relax_factor": 0.0,
     # MUMPS's workspace: its estimate and 100 % more, not IPOPT's 1000 % more. The larger
     # one is allocated afresh at every factorisation and its page faults were 15-20 % of the
-    # KKT solves' wall time at N = 256 (order4+jit, 2026-12-02, medians of 5 in turns: the
-    # quadrotor 499 -> 424 ms, quadrotor_min_time 1497 -> 1314 ms, the reaction wheels 634 ->
-    # 534 ms; rk4_quat+jit on the quadrotor 285 -> 228 ms); smaller KKT systems unchanged,
+    # KKT solves' wall time at N = 256 (scripts/bench_setting.py, 2026-12-02, order4+jit: the
+    # quadrotor 486 -> 410 ms, quadrotor_min_time 1462 -> 1273 ms, the reaction wheels 628 ->
+    # 529 ms; rk4_quat+jit on the quadrotor 279 -> 224 ms); smaller KKT systems unchanged,
     # the same iterations and costs. MUMPS asks for more when it needs it and IPOPT grows
     # the workspace then (no file did, even at 20 %)
     "mumps_mem_percent": 100,
