@@ -112,6 +112,25 @@ def test_fatrop_stops_at_the_time_limit(monkeypatch) -> None:
     assert "solver.max_seconds" in sol.hint and sol.backend == "fatrop"
 
 
+def test_a_stuck_fatrop_run_fails_before_the_deadline_and_ipopt_solves_the_start(
+        monkeypatch) -> None:
+    """A fatrop run longer than its iterations can take (``stuck_after``) is stuck: it fails
+    there, not at the deadline, and IPOPT solves the start with the time left."""
+    from ocgroupoid.nlp.backends import fatrop
+    monkeypatch.setattr(isolated, "NAN_LIMIT", 10 ** 9)  # only the time is left to stop it
+    monkeypatch.setattr(fatrop, "STUCK_FLOOR", 0.5)
+    monkeypatch.setattr(fatrop, "STUCK_SECONDS", 1e-6)
+    solver, guess = hanging_heavy_top(max_seconds=60.0)
+    tr = solver.transcription
+    assert tr.fatrop is not None
+    assert tr.fatrop.stuck_after == pytest.approx(0.5 + 1e-6 * tr.fatrop.max_iter * tr.nx)
+    t0 = time.perf_counter()
+    r = tr.solve(guess, tr.pack())
+    assert time.perf_counter() - t0 < 30
+    assert r.backend == "ipopt after fatrop" and r.status != "Maximum_WallTime_Exceeded"
+    assert r.earlier[0][:2] == ("fatrop", fatrop.FAILED)
+
+
 def test_fatrop_stops_on_repeated_nan_and_ipopt_solves_the_start() -> None:
     solver, guess = hanging_heavy_top(max_seconds=60.0)
     t0 = time.perf_counter()

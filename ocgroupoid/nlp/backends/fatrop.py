@@ -16,7 +16,8 @@ as parameters, and its solution is mapped back (:meth:`FatropBackend.unscaled`).
 dual warm start (a warm start gives it the primal point) and no iteration callback, no time
 limit, and it loops without bound on some singular KKT systems: every solve runs in a helper
 process (:mod:`~ocgroupoid.nlp.isolated`), stopped at its deadline, after repeated
-NaN evaluations, or on Ctrl-C.
+NaN evaluations, on Ctrl-C, or once it runs longer than its iterations can take
+(:data:`STUCK_SECONDS`).
 """
 
 from __future__ import annotations
@@ -59,6 +60,16 @@ SHARED_OPTIONS = ("tol", "max_iter", "mu_init", "bound_push", "bound_frac", "con
 #: one iteration more than before or fewer (heavy_top_rotors order2 at N = 32 to 256: 21-22,
 #: were 23-28), except heavy_top_rotors order2 at N = 16 (28, was 23; IPOPT 22)
 DEFAULT_FATROP: dict[str, Any] = {"watchdog_shortened_iter_trigger": 0, "max_soc": 20}
+#: the longest a fatrop run may take before it counts as stuck: :data:`STUCK_FLOOR` seconds
+#: and :data:`STUCK_SECONDS` per variable and iteration up to ``max_iter`` (10 times the
+#: most a run took on any problem file, 1.2-9 us per variable and iteration at N = 8, 64 and
+#: 256, the most at N = 8 where the call's fixed cost weighs). fatrop has no time limit and
+#: prints nothing below print_level 5 (whose output, through CasADi's Python hook, costs
+#: 0.3-0.7 ms a solve), and on a singular KKT system its inertia correction loops without
+#: printing or returning (heavy_top_rotors, order4, N = 8, "great circle, long way": 41
+#: iterations in 15 ms, then nothing until the deadline, 600 s by default): past this
+#: limit the run has failed, and IPOPT solves the start with the time left
+STUCK_FLOOR, STUCK_SECONDS = 5.0, 40e-6
 #: fatrop's stop at an acceptable point: its error below ``tol_acceptable`` for
 #: ``acceptable_iter`` iterations in a row. Near some solutions with active bounds fatrop
 #: calls its KKT system indefinite and regularises it in every iteration, and its last steps
@@ -235,6 +246,8 @@ class FatropBackend(Backend):
         #: the bounds fatrop is given, in stage form (:func:`tightened`)
         self.bounds = tightened(nlp.bounds_function, self.form)
         self.max_iter = int(ipopt.get("max_iter", 3000))
+        #: the seconds after which a run counts as stuck (:data:`STUCK_SECONDS`)
+        self.stuck_after = STUCK_FLOOR + STUCK_SECONDS * self.max_iter * nlp.nx
         own = {"print_level": 0, **DEFAULT_FATROP, **ACCEPTABLE_STOP}
         self.jit_compiled = False
         #: ``beside`` compiled with fatrop's Functions (with jit and beside), else None
@@ -307,16 +320,21 @@ class FatropBackend(Backend):
     def run(self, start: Start) -> Run:
         """Run fatrop from the primal point of ``start`` (its multipliers and listener are
         not for fatrop), in the helper process, until its deadline (status
-        :data:`TIMED_OUT`), stopped after repeated NaN evaluations (:data:`FAILED`, with a
-        note) or once ``start.stop()`` is true (:data:`INTERRUPTED`). Its seconds are the
-        caller's wait: the way to the helper and back with the solve."""
+        :data:`TIMED_OUT`), stopped after repeated NaN evaluations or past
+        :attr:`stuck_after` (:data:`FAILED`, with a note) or once ``start.stop()`` is true
+        (:data:`INTERRUPTED`). Its seconds are the caller's wait: the way to the helper and
+        back with the solve."""
         x0, p = start.x0, start.p
         seconds = start.deadline - time.monotonic()
+        stuck = self.stuck_after < seconds  # the run is cut before the deadline
         t0 = time.perf_counter()
-        answer = self._isolated.call((x0, p), seconds, start.stop)
+        answer = self._isolated.call((x0, p), min(seconds, self.stuck_after), start.stop)
         if isinstance(answer, Stopped):
             status, note = {
-                "time": (TIMED_OUT, f"fatrop stopped at the time limit ({seconds:.3g} s)"),
+                "time": (FAILED, f"fatrop stopped after {self.stuck_after:.3g} s, longer than "
+                                 f"{self.max_iter} of its iterations take here: stuck in a "
+                                 "loop (an inertia correction that never ends?)") if stuck
+                else (TIMED_OUT, f"fatrop stopped at the time limit ({seconds:.3g} s)"),
                 "nan": (FAILED, f"fatrop stopped after {NAN_LIMIT} NaN evaluations"),
                 "stop": (INTERRUPTED, "fatrop stopped by an interrupt"),
             }.get(answer.reason, (FAILED, f"fatrop's process died ({answer.detail})"))
