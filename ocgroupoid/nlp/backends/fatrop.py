@@ -61,13 +61,14 @@ SHARED_OPTIONS = ("tol", "max_iter", "mu_init", "bound_push", "bound_frac", "con
 #: were 23-28), except heavy_top_rotors order2 at N = 16 (28, was 23; IPOPT 22)
 DEFAULT_FATROP: dict[str, Any] = {"watchdog_shortened_iter_trigger": 0, "max_soc": 20}
 #: the longest a fatrop run may take before it counts as stuck: :data:`STUCK_FLOOR` seconds
-#: and :data:`STUCK_SECONDS` per variable and iteration up to ``max_iter`` (10 times the
-#: most a run took on any problem file, 1.2-9 us per variable and iteration at N = 8, 64 and
-#: 256, the most at N = 8 where the call's fixed cost weighs). fatrop has no time limit and
-#: prints nothing below print_level 5 (whose output, through CasADi's Python hook, costs
-#: 0.3-0.7 ms a solve), and on a singular KKT system its inertia correction loops without
-#: printing or returning (heavy_top_rotors, order4, N = 8, "great circle, long way": 41
-#: iterations in 15 ms, then nothing until the deadline, 600 s by default): past this
+#: and :data:`STUCK_SECONDS` per variable and iteration up to ``max_iter``. Measured on every
+#: problem file (order4, fatrop, jit, from the first guess): 1.2-4.1 us per variable and
+#: iteration at N = 64 and 256, so 10 times the most; 1.6-9 us at N = 8, where the call's
+#: fixed cost of about a millisecond weighs, and which the floor covers. fatrop has no time
+#: limit and prints nothing below print_level 5 (whose output, through CasADi's Python hook,
+#: costs 0.3-0.7 ms a solve), and on a singular KKT system its inertia correction loops
+#: without printing or returning (heavy_top_rotors, order4, N = 8, "great circle, long way":
+#: 41 iterations in 15 ms, then nothing until the deadline, 600 s by default): past this
 #: limit the run has failed, and IPOPT solves the start with the time left
 STUCK_FLOOR, STUCK_SECONDS = 5.0, 40e-6
 #: fatrop's stop at an acceptable point: its error below ``tol_acceptable`` for
