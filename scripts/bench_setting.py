@@ -28,17 +28,17 @@ from rich.table import Table
 
 from ocgroupoid import files
 from ocgroupoid.bench.chart import save_png
-from ocgroupoid.bench.methods import Method, parse_methods
+from ocgroupoid.bench.methods import Method, parse_grids, parse_methods
 from ocgroupoid.bench.record import write_summary
 from ocgroupoid.bench.script import arguments, cell, record, steps
 from ocgroupoid.bench.timing import Setting, Trial, interleaved
-from ocgroupoid.errors import ConfigError, OcgError
+from ocgroupoid.errors import OcgError
 
 ROOT = Path(__file__).resolve().parents[1]
 METHODS = (Method("order4", jit=True), Method("rk4_quat", jit=True))
 METHOD_LABELS = ",".join(m.label for m in METHODS)
 DEFAULT_SET = ["solver.ipopt.mumps_mem_percent=1000"]
-NS, REPEATS = "64,256", 5
+NS, REPEATS = (64, 256), 5
 QUICK_FILES, QUICK_NS = ("so3_rest_to_rest",), (16,)
 
 
@@ -48,7 +48,8 @@ def own_arguments(ap: argparse.ArgumentParser) -> None:
                     help=f"a setting changed, as for ocgroupoid solve (default {DEFAULT_SET[0]})")
     ap.add_argument("--schemes", default=METHOD_LABELS,
                     help=f"methods, comma-separated (default {METHOD_LABELS})")
-    ap.add_argument("--N", default=NS, help=f"intervals, comma-separated (default {NS})")
+    ap.add_argument("--N", help="intervals, comma-separated (default "
+                    f"{','.join(map(str, NS))})")
 
 
 def compared(base: dict[str, Any], changed: dict[str, Any]) -> dict[str, Any]:
@@ -91,18 +92,6 @@ def chart(rows: list[dict[str, Any]], overrides: list[str], path: Path) -> Path:
     return save_png(fig, path, 110)
 
 
-def grid(text: str) -> tuple[int, ...]:
-    """``--N``: whole numbers > 0, comma-separated; ConfigError otherwise."""
-    try:
-        Ns = tuple(int(n) for n in text.split(","))
-    except ValueError:
-        Ns = ()
-    if not Ns or min(Ns) < 1:
-        raise ConfigError(f"--N takes whole numbers > 0 separated by commas, e.g. {NS}; got "
-                          f"{text!r}")
-    return Ns
-
-
 def main() -> None:
     args = arguments(__doc__.splitlines()[0], ROOT / "results", more=own_arguments)
     overrides = args.overrides or DEFAULT_SET
@@ -112,7 +101,7 @@ def main() -> None:
     repeats = 1 if args.quick else REPEATS
     try:  # every input checked before anything is built
         methods = parse_methods(args.schemes, METHODS)
-        Ns = QUICK_NS if args.quick else grid(args.N)
+        Ns = QUICK_NS if args.quick else parse_grids(args.N, NS)
         configs = {(path, changed): files.load(path, overrides if changed else [])
                    for path in paths for changed in (False, True)}
     except OcgError as e:

@@ -29,8 +29,8 @@ def test_script_runs_quick(script: Path, tmp_path) -> None:
     (["--set", "solver.ipopt.mumps_mem_percent=abc"], "mumps_mem_percent"),
     (["--set", "horizon.no_such_key=1"], "no_such_key"),
     (["--schemes", "order9"], "unknown scheme 'order9'"),
-    (["--N", "64,x"], "--N takes whole numbers"),
-    (["--N", "0"], "--N takes whole numbers"),
+    (["--N", "64,x"], "--N: '64,x' is not a comma-separated list of integers"),
+    (["--N", "0"], "--N: N must be at least 2"),
 ])
 def test_bench_setting_refuses_bad_input_in_one_line(args: list[str], says: str,
                                                      tmp_path: Path) -> None:
