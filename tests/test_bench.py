@@ -101,8 +101,8 @@ def test_bad_input_exits_2_with_the_option_named(tmp_path: Path, args: list[str]
 def test_methods_name_their_backend_and_compiled_evaluation() -> None:
     """``SCHEME[:RETRACTION][@BACKEND][+jit]``: parsed, labelled back the same way, and a
     method that repeats another's computation (exp on R^n) is named against the same
-    backend."""
-    from ocgroupoid.bench.methods import Method, parse_methods, redundant
+    backend, and one without a rule for the problem's order is left out."""
+    from ocgroupoid.bench.methods import Method, left_out, parse_methods
     methods = parse_methods("order4@fatrop+jit,order2:exp@fatrop,rk4_quat+jit,order2@fatrop",
                             ())
     assert methods == [Method("order4", "cayley", "fatrop", True),
@@ -112,9 +112,12 @@ def test_methods_name_their_backend_and_compiled_evaluation() -> None:
     assert [m.label for m in methods] == ["order4@fatrop+jit", "order2:exp@fatrop",
                                           "rk4_quat+jit", "order2@fatrop"]
     plane = files.build(files.load(ROOT / "problems" / "cart_pole.yaml"))
-    assert redundant(methods, plane) == {
+    assert left_out(methods, plane) == {
         "order2:exp@fatrop": "identical to order2@fatrop here: every retraction is the "
                              "translation on R^n"}
+    ball = files.build(files.load(ROOT / "problems" / "plate_ball.yaml"))
+    assert left_out([*methods, Method("order6")], ball)["order6"] == \
+        "order6 has no rule for order-1 problems"
 
 
 @pytest.mark.parametrize("command", ["work-precision", "stability"])

@@ -60,16 +60,17 @@ def solved_but_degenerate(sol: og.Solution) -> bool:
             and all("is implied by" in f for f in failures))
 
 
-@pytest.mark.parametrize("scheme", ["order2", "order4"])
+@pytest.mark.parametrize("scheme", ["order2", "order4", "order6"])
 def test_minimum_time_error_falls_with_uniform_steps(scheme: str) -> None:
     """Odd N: no node on the switch at T/2, so T carries an error that falls with N; the
-    controls stay within the bound. order4 integrates this double integrator exactly, so
-    its plans cannot beat the true minimum time (order2's central differences can)."""
+    controls stay within the bound. order4 and order6 integrate this double integrator
+    exactly, so their plans cannot beat the true minimum time (order2's central differences
+    can)."""
     errors = []
     for N in (9, 17, 33, 65):
         sol = og.solve(minimum_time(), N=N, scheme=scheme)
         assert solved_but_degenerate(sol), (N, sol.status, sol.hint)
-        if scheme == "order4":
+        if scheme != "order2":
             assert sol.T >= T_STAR - 1e-8
         errors.append(abs(sol.T - T_STAR))
         t = np.linspace(0, sol.T, 2001)
@@ -78,10 +79,11 @@ def test_minimum_time_error_falls_with_uniform_steps(scheme: str) -> None:
     assert np.all(np.diff(errors) < 0) and errors[-1] <= 2e-3, errors
 
 
-@pytest.mark.parametrize("N", [9, 17, 33])
-def test_adaptive_steps_put_a_node_on_the_switch(N: int) -> None:
+@pytest.mark.parametrize("scheme, N", [("order4", 9), ("order4", 17), ("order4", 33),
+                                       ("order6", 9), ("order6", 17)])
+def test_adaptive_steps_put_a_node_on_the_switch(scheme: str, N: int) -> None:
     """A uniform solve finds the switch; the phased solve moves a node onto it: T exact."""
-    sol = og.solve(minimum_time(), N=N, scheme="order4", steps="adaptive")
+    sol = og.solve(minimum_time(), N=N, scheme=scheme, steps="adaptive")
     assert solved_but_degenerate(sol), (sol.status, sol.hint)
     assert abs(sol.T - T_STAR) <= 1e-6, sol.T
     assert np.min(np.abs(sol.t - T_STAR / 2)) <= 1e-6  # a node at the switch

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 import ocgroupoid as og
+from ocgroupoid.nlp.schemes import SCHEMES
 from ocgroupoid.systems.rigid_body import rigid_body
 
 from .test_api_general import minimum_acceleration, rolling_problem
@@ -24,7 +25,10 @@ def free_end_velocity() -> og.Problem:
                                      rolling])
 @pytest.mark.parametrize("scheme", og.nlp.SCHEME_NAMES)
 def test_every_variable_is_used_and_licq_holds(factory, scheme: str) -> None:
-    solver = og.compile_problem(factory(), N=16, scheme=scheme)
+    problem = factory()
+    if problem.order not in SCHEMES[scheme]:  # order6 has no first-order rule
+        pytest.skip(f"{scheme} has no rule for order-{problem.order} problems")
+    solver = og.compile_problem(problem, N=16, scheme=scheme)
     tr = solver.transcription
     sol = solver.solve(multistart=factory is rolling)
     if scheme in og.nlp.schemes.BASELINES:  # solved, but a quaternion drifts off SO(3)

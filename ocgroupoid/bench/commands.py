@@ -49,8 +49,9 @@ def work_precision_command(
                                           "methods: a scheme, then optionally :RETRACTION, "
                                           "@BACKEND, +jit, +coarse (solved on N/4 first), "
                                           "e.g. order4@fatrop+jit+coarse (default order2, "
-                                          "order4, order2:exp, rk4_quat, rk4_matrix, "
-                                          "rk4_euler)"),
+                                          "order4, order6, order2:exp, rk4_quat, "
+                                          "rk4_matrix, rk4_euler; order6 on second-order "
+                                          "problems only)"),
     grids: Optional[str] = typer.Option(None, "--N", help="comma-separated N (default "
                                         "8,16,32,64,128)"),
     repeats: int = typer.Option(3, "--repeats", help="timed IPOPT runs per N (at least; "
@@ -100,8 +101,8 @@ def stability_command(
     schemes: Optional[str] = typer.Option(None, "--schemes", help="comma-separated "
                                           "methods: a scheme, then optionally :RETRACTION, "
                                           "@BACKEND, +jit, +coarse (default order2, order4, "
-                                          "order2:exp, order2:first_order and the three "
-                                          "baselines)"),
+                                          "order6, order2:exp, order2:first_order and the "
+                                          "three baselines)"),
     grids: Optional[str] = typer.Option(None, "--N", help="comma-separated N (default "
                                         "2,4,8,16,32,64)"),
     angles: Optional[str] = typer.Option(None, "--angles", help="comma-separated slew "

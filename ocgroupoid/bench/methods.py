@@ -21,7 +21,7 @@ from ..lie.rn import Rn
 from ..model.problem import Problem
 from ..nlp.method import DEFAULT_RETRACTION, Method as Discretisation
 from ..nlp.options import BACKENDS, DEFAULT_BACKEND, MAX_SECONDS, SolverOptions
-from ..nlp.schemes import BASELINES, DEFAULT_RULE, SCHEME_NAMES
+from ..nlp.schemes import BASELINES, DEFAULT_RULE, SCHEME_NAMES, SCHEMES
 from ..nlp.schemes.coordinates import coordinates
 
 #: a ``+coarse`` method on N intervals solves on N / COARSE_FACTOR first (plate_ball,
@@ -94,11 +94,11 @@ class Method:
                              max_seconds=max_seconds, continuation=() if n is None else (n,))
 
 
-#: ours with cayley and exp, then the baselines
-WORK_PRECISION = (Method("order2"), Method("order4"), Method("order2", "exp"),
-                  Method("rk4_quat"), Method("rk4_matrix"), Method("rk4_euler"))
+#: ours (order2 with cayley and exp), then the baselines
+OURS_DEFAULT = (Method("order2"), Method("order4"), Method("order6"), Method("order2", "exp"))
+WORK_PRECISION = (*OURS_DEFAULT, Method("rk4_quat"), Method("rk4_matrix"), Method("rk4_euler"))
 #: the same and the first-order retraction (SO(3) problems only)
-STABILITY = (*WORK_PRECISION[:3], Method("order2", "first_order"), *WORK_PRECISION[3:])
+STABILITY = (*OURS_DEFAULT, Method("order2", "first_order"), *WORK_PRECISION[len(OURS_DEFAULT):])
 
 
 def parse_methods(text: str | None, default: tuple[Method, ...]) -> list[Method]:
@@ -160,10 +160,11 @@ def parse_floats(text: str | None, default: tuple[float, ...], option: str) -> l
             from None
 
 
-def redundant(methods: list[Method], problem: Problem) -> dict[str, str]:
-    """Methods that would repeat another one's computation on ``problem``, with the reason:
-    the matrix and Euler baselines equal rk4_quat without an SO(3) factor, and every
-    retraction equals cayley on R^n factors."""
+def left_out(methods: list[Method], problem: Problem) -> dict[str, str]:
+    """Methods not run on ``problem``, with the reason: a scheme without a rule for its order
+    (order6 on a first-order problem), and those that would repeat another one's
+    computation (the matrix and Euler baselines equal rk4_quat without an SO(3) factor, and
+    every retraction equals cayley on R^n factors)."""
     factors = problem.groupoid.factors
     own_coordinates = any(coordinates("matrix", f).name != "quaternion" for f in factors)
     curved = any(not isinstance(f.group, Rn) for f in factors)
@@ -171,7 +172,9 @@ def redundant(methods: list[Method], problem: Problem) -> dict[str, str]:
     out = {}
     for m in methods:
         quat, cayley = replace(m, scheme="rk4_quat"), replace(m, retraction=DEFAULT_RETRACTION)
-        if m.baseline and m.scheme != "rk4_quat" and not own_coordinates and quat in present:
+        if problem.order not in SCHEMES[m.scheme]:
+            out[m.label] = f"{m.scheme} has no rule for order-{problem.order} problems"
+        elif m.baseline and m.scheme != "rk4_quat" and not own_coordinates and quat in present:
             out[m.label] = f"identical to {quat.label} here: no SO(3) factor to carry " \
                            "otherwise"
         elif not m.baseline and m.retraction != DEFAULT_RETRACTION and not curved and \

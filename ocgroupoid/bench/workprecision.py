@@ -35,7 +35,7 @@ from ..model.problem import Problem
 from ..solve import Solution
 from .chart import work_precision_chart
 from .equal_accuracy import compare, headline, lines
-from .methods import COARSE_FACTOR, COARSE_MIN, Method, redundant
+from .methods import COARSE_FACTOR, COARSE_MIN, Method, left_out
 from .minimum import OTHER_COST, OTHER_PATH, path_deviation, which_minimum
 from .record import Rows, write_summary
 from .reference import STEPS, check_reference_N, reference
@@ -153,7 +153,7 @@ def work_precision(path: Path, overrides: list[str], out: Path, methods: list[Me
     problem = files.build(cfg)
     name = name or Path(path).stem
     setting = Setting.of(f)
-    skipped = redundant(methods, problem)
+    skipped = left_out(methods, problem)
     run = [m for m in methods if m.label not in skipped]
     grids = {m: method_grids(m, Ns) for m in run}
     check_methods(problem, run, setting, min(Ns))

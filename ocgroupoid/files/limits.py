@@ -48,11 +48,11 @@ def memory_bytes() -> int:
 
 
 def variables_per_interval(pb: Problem) -> int:
-    """An upper bound of the decision variables per interval over every scheme (order4 draws
-    bounded recovered controls as lines: two values per control and interval, as controls of
-    their own)."""
+    """An upper bound of the decision variables per interval over every scheme (order6: a node
+    velocity and two bubbles; order4 and order6 draw bounded recovered controls as lines: two
+    values per control and interval, as controls of their own)."""
     G = pb.groupoid
-    return 2 * G.algebra_dim + G.state_size + 2 * max(pb.U.numel(), len(pb.controls))
+    return 3 * G.algebra_dim + G.state_size + 2 * max(pb.U.numel(), len(pb.controls))
 
 
 def check_size(pb: Problem, N: int, starts: int, where: str) -> None:

@@ -188,10 +188,11 @@ class DiscretizationSection(Strict):
         "rule)")
     rule: str = Field(DEFAULT_RULE, description="discretisation rule of the constraints")
     steps: Literal[STEPS] = Field(  # type: ignore[valid-type]
-        DEFAULT_STEPS, description="uniform steps h = T/N, or adaptive ones (order4)")
+        DEFAULT_STEPS, description="uniform steps h = T/N, or adaptive ones (order4, "
+        "order6)")
     bound_points: int = Field(
         0, ge=0, le=MAX_BOUND_POINTS, description="impose the bounds at this many more "
-        "points inside every interval (order4), where a bound is violated between the "
+        "points inside every interval (order4, order6), where a bound is violated between the "
         "scheme's points")
 
 

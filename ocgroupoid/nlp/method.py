@@ -44,7 +44,7 @@ class Method:
     rule: str = DEFAULT_RULE
     steps: str = DEFAULT_STEPS
     #: bounds imposed at this many more points inside every interval (uniformly spaced),
-    #: beyond the scheme's own; order4 only
+    #: beyond the scheme's own; order4 and order6 only
     bound_points: int = 0
 
     def __post_init__(self) -> None:

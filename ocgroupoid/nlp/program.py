@@ -92,7 +92,8 @@ class NonlinearProgram:
         if disc.steps == "adaptive" and not self.scheme.adaptive_steps:
             raise ConfigError(
                 f"adaptive steps need a scheme whose stages are intervals; {disc.scheme} for "
-                f"order-{problem.order} problems has node stages: choose scheme order4")
+                f"order-{problem.order} problems has node stages: choose scheme order4 "
+                "(or order6)")
         self.layout = Layout(problem, self.masks, self.scheme.n_stage, disc.N, disc.phases)
         self.scheme.index(self.layout)
         self.nx, self.np = self.layout.nx, self.layout.np
@@ -157,7 +158,7 @@ class NonlinearProgram:
         # would over-determine the interval's unknowns where a problem has conditions that
         # its conservation laws already imply); the optimum holds the rest
         times = np.asarray(getattr(self.scheme, "bound_times", np.zeros(b.points)))
-        gauss = np.isclose(times, GAUSS2[0])
+        gauss = np.isclose(times, getattr(self.scheme, "collocation", GAUSS2)[0])
         if not gauss.any():
             gauss = np.arange(times.size) == 0
         lo_cols, hi_cols = [], []

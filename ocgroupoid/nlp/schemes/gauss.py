@@ -1,6 +1,6 @@
-"""The numbers of order4: Gauss-Legendre points and weights on [0, 1], where its bounds hold
-and its controls are sampled, and the polynomials its read-out reports (the quadratic velocity
-of an interval, the cubic and linear controls through its samples)."""
+"""The numbers of order4 and order6: Gauss-Legendre points and weights on [0, 1], where their
+bounds hold and their controls are sampled, and the polynomials their read-outs report (the
+quadratic or cubic velocity of an interval, the controls through its samples, lines)."""
 
 from __future__ import annotations
 
@@ -21,6 +21,12 @@ BOUND_POINTS = np.array([0.0, *GAUSS2, 1.0])
 #: where a cubic control is sampled per interval: the bound points, so that the control a
 #: solution reports equals the bounded one wherever a bound is imposed
 SAMPLES = BOUND_POINTS
+#: order6's: the bounds at both ends and its three Gauss points
+BOUND_POINTS6 = np.array([0.0, *GAUSS3, 1.0])
+#: where order6 samples a control (a polynomial of degree 6 through them, so that the
+#: read-out's interpolation error, O(h^7) per interval, stays below the scheme's): its bound
+#: points and the quarters between them
+SAMPLES6 = np.array([0.0, GAUSS3[0], 0.25, 0.5, 0.75, GAUSS3[2], 1.0])
 
 
 def quadratic(y0: Any, y1: Any, b: Any, h: Any, tau: float) -> tuple[Any, Any]:
@@ -30,16 +36,31 @@ def quadratic(y0: Any, y1: Any, b: Any, h: Any, tau: float) -> tuple[Any, Any]:
     return y, dy
 
 
-def cubic_coefficients(samples: Any, h: Any) -> Any:
-    """PPoly coefficients (highest power first, in t - t_k) of the cubics through samples
-    at :data:`SAMPLES` of each interval: rows ``power * m + component``, one column per
-    interval, for samples given as 4 blocks of m rows and steps h (1 x N)."""
-    V_inv = np.linalg.inv(np.vander(SAMPLES, 4, increasing=True))  # alpha_j of tau^j
-    m = samples.size1() // 4
+def cubic(y0: Any, y1: Any, b: Any, h: Any, tau: float) -> tuple[Any, Any]:
+    """order6's velocity at ``t_k + tau h`` and its rate, for node values y0, y1 and bubbles
+    ``b = (b1, b2)`` (stacked): ``y = (1 - tau) y0 + tau y1 + 4 tau (1 - tau) (b1 + b2 (2 tau
+    - 1))``, b1 the value at the midpoint minus the mean of the ends (as order4's bubble), b2
+    the odd cubic part."""
+    n = y0.numel() if hasattr(y0, "numel") else np.size(y0)
+    b1, b2 = b[:n], b[n:]
+    w = b1 + (2 * tau - 1) * b2
+    y = (1 - tau) * y0 + tau * y1 + 4 * tau * (1 - tau) * w
+    dy = (y1 - y0 + 4 * (1 - 2 * tau) * w + 8 * tau * (1 - tau) * b2) / h
+    return y, dy
+
+
+def polynomial_coefficients(samples: Any, at: np.ndarray, h: Any) -> Any:
+    """PPoly coefficients (highest power first, in t - t_k) of the polynomials of degree
+    ``at.size - 1`` through samples at the fractions ``at`` of each interval: rows
+    ``power * m + component``, one column per interval, for samples given as ``at.size``
+    blocks of m rows and steps h (1 x N)."""
+    k = at.size
+    V_inv = np.linalg.inv(np.vander(at, k, increasing=True))  # alpha_j of tau^j
+    m = samples.size1() // k
     H = ca.repmat(h, m, 1)
-    blocks = [samples[i * m:(i + 1) * m, :] for i in range(4)]
-    alpha = [sum(float(V_inv[j, i]) * blocks[i] for i in range(4)) for j in range(4)]
-    return ca.vertcat(*[alpha[j] / H**j for j in (3, 2, 1, 0)])
+    blocks = [samples[i * m:(i + 1) * m, :] for i in range(k)]
+    alpha = [sum(float(V_inv[j, i]) * blocks[i] for i in range(k)) for j in range(k)]
+    return ca.vertcat(*[alpha[j] / H**j for j in range(k - 1, -1, -1)])
 
 
 def linear_coefficients(u0: Any, u1: Any, t0: float, t1: float, h: Any) -> Any:
@@ -50,9 +71,10 @@ def linear_coefficients(u0: Any, u1: Any, t0: float, t1: float, h: Any) -> Any:
     return ca.vertcat(slope, u0 - slope * t0 * H)
 
 
-def bound_times(extra: int) -> np.ndarray:
-    """Where the bounds hold on an interval (fractions): :data:`BOUND_POINTS` and ``extra``
-    more, uniformly spaced inside (``discretization.bound_points``)."""
+def bound_times(extra: int, points: np.ndarray = BOUND_POINTS) -> np.ndarray:
+    """Where the bounds hold on an interval (fractions): a scheme's ``points``
+    (:data:`BOUND_POINTS`) and ``extra`` more, uniformly spaced inside
+    (``discretization.bound_points``)."""
     inside = np.arange(1, extra + 1) / (extra + 1)
-    return np.unique(np.concatenate([BOUND_POINTS, inside]))
+    return np.unique(np.concatenate([points, inside]))
 

@@ -66,7 +66,7 @@ First-order problems: :class:`~ocgroupoid.nlp.schemes.gauss_stages.GaussStages`.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import casadi as ca
 import numpy as np
@@ -79,12 +79,13 @@ from ..layout import Layout
 from ..stages import Stages
 from .base import DEFAULT_RULE, Pick, Readout, Scheme, columns, stage_function
 from .gauss import (
+    BOUND_POINTS,
     GAUSS2,
     GAUSS3,
     GAUSS3_W,
     SAMPLES,
     bound_times,
-    cubic_coefficients,
+    polynomial_coefficients,
     quadratic,
 )
 
@@ -99,23 +100,24 @@ def local_horizons(scheme: Scheme, pick: Pick) -> ca.MX:
 
 
 def gauss_blocks(scheme: QuadraticGauss | GaussStages, sizes: list[int], idx: np.ndarray,
-                 point: str, split: Any = None) -> list[Block]:
-    """The path block (cost and Phi_d at the two Gauss points of every interval) and, with
-    bounds, the inequality block of an order4 scheme whose ``interval`` Function returns
-    ``(L, Phi, H)``; ``split`` maps the stage inputs to the Function's arguments."""
+                 point: str, split: Any = None, at: np.ndarray = GAUSS2) -> list[Block]:
+    """The path block (cost and Phi_d at the Gauss points ``at`` of every interval) and, with
+    bounds, the inequality block of an order4 or order6 scheme whose ``interval`` Function
+    returns ``(L, Phi, H)``; ``split`` maps the stage inputs to the Function's arguments."""
     N, pb = scheme.N, scheme.problem
     npar = pb.P.numel()
     names = scheme.stages.constraint_names
-    times = ((np.arange(N)[:, None] + GAUSS2[None, :]) / N).ravel()
+    times = ((np.arange(N)[:, None] + at[None, :]) / N).ravel()
     cols = [f"interval {k}" for k in range(N)]
     call = (lambda *z: scheme.interval(*split(*z))) if split else scheme.interval  # noqa: E731
     blocks = [Block("interval", stage_function("interval", sizes, lambda *z: tuple(
         call(*z)[:2])), idx, 1 + npar, Kind.PATH,
-        [f"{n} ({point} {j + 1})" for j in range(2) for n in names], cols, times, points=2)]
+        [f"{n} ({point} {j + 1})" for j in range(at.size) for n in names], cols, times,
+        points=at.size)]
     if pb.inequalities:
         bt = scheme.bound_times
-        named = {0.0: "start", float(GAUSS2[0]): f"{point} 1", float(GAUSS2[1]): f"{point} 2",
-                 1.0: "end"}
+        named = {0.0: "start", 1.0: "end",
+                 **{float(c): f"{point} {j + 1}" for j, c in enumerate(at)}}
         where = [named.get(float(c), f"at {c:.3g} of the interval") for c in bt]
         blocks.append(Block("interval_bounds", stage_function(
             "interval_bounds", sizes, lambda *z: (ca.SX(1, 1), call(*z)[2])), idx, 1 + npar,
@@ -156,9 +158,20 @@ class QuadraticGauss(Scheme):
     rescue = "order2"
     summary = ("piecewise-quadratic velocity, 3-point Gauss cost, Phi at the 2 Gauss points "
                "(Gauss-Legendre collocation), 6th-order Magnus step with exp")
+    #: bubbles per interval and velocity component (the velocity's degree less one)
+    bubbles: ClassVar[int] = 1
+    #: the Gauss points (fractions of an interval) where Phi holds, and their weights
+    collocation: ClassVar[np.ndarray] = GAUSS2
+    collocation_weights: ClassVar[np.ndarray] = np.array([0.5, 0.5])
+    #: where the bounds hold (before ``discretization.bound_points``) and where the controls
+    #: are sampled
+    base_bound_times: ClassVar[np.ndarray] = BOUND_POINTS
+    samples: ClassVar[np.ndarray] = SAMPLES
+    #: the velocity at ``t_k + tau h`` and its rate, ``(y0, y1, b, h, tau) -> (y, dy)``
+    velocity = staticmethod(quadratic)
 
     Y: np.ndarray  # dim y x (N+1) node velocities (y_0 = V_0, y_N = V_N)
-    B: np.ndarray  # dim y x N bubbles
+    B: np.ndarray  # (bubbles dim y) x N bubbles
 
     def __init__(self, problem: Problem, N: int, retraction_name: str, rule: str,
                  bound_points: int = 0) -> None:
@@ -170,33 +183,36 @@ class QuadraticGauss(Scheme):
         ds, dg, nu = G.state_size, G.algebra_dim, self.stages.n_u
         #: where the bounds hold on an interval (fractions): its ends only when every bound
         #: is affine in the controls that are variables alone (then implied on the whole
-        #: line between them) and no more points were asked for, else :data:`BOUND_POINTS`
-        #: and the ``bound_points`` more
+        #: line between them) and no more points were asked for, else
+        #: :attr:`base_bound_times` and the ``bound_points`` more
         self.bound_times = np.array([0.0, 1.0]) if bound_points == 0 and \
             on_the_line(self.stages.inequalities, pb, self.stages.U) \
-            else bound_times(bound_points)
+            else bound_times(bound_points, self.base_bound_times)
         s = ca.SX.sym("s", ds)
-        y0, y1, b = (ca.SX.sym(n, dg) for n in ("y0", "y1", "b"))
+        y0, y1 = (ca.SX.sym(n, dg) for n in ("y0", "y1"))
+        b = ca.SX.sym("b", self.bubbles * dg)
         ue = ca.SX.sym("u", 2 * nu)  # controls of their own at the interval's two ends
         T = ca.SX.sym("T")
         h = T / N
 
+        def velocity(tau: float) -> tuple[ca.SX, ca.SX]:
+            return self.velocity(y0, y1, b, h, tau)
+
         # from node to node: the sixth-order Magnus step (module docstring)
-        g1, g2, g3 = (quadratic(y0, y1, b, h, float(g))[0] for g in GAUSS3)
+        g1, g2, g3 = (velocity(float(g))[0] for g in GAUSS3)
         step = G.magnus6(g1, g2, g3, h)
 
         def theta(c: float) -> ca.SX:
-            """Exponential coordinates of the step to t_k + c h: inside the interval the
-            fourth-order Magnus step (local O(h^5)), at its end the node's."""
+            """Exponential coordinates of the step to t_k + c h: inside the interval
+            :meth:`inner_step`, at its end the node's."""
             if c == 0.0:
                 return ca.SX.zeros(dg)
             if c == 1.0:
                 return step
-            ya, yb = (quadratic(y0, y1, b, h, c * float(g))[0] for g in GAUSS2)
-            return G.magnus(ya, yb, c * h)
+            return self.inner_step(G, velocity, c, h)
 
         def at(expr: ca.SX, tau: float, u: ca.SX | None = None) -> ca.SX:
-            y, dy = quadratic(y0, y1, b, h, tau)
+            y, dy = velocity(tau)
             return self.stages.at([expr], G.step(s, self.retractions, theta(tau)), y, dy,
                                   u)[0]
 
@@ -208,38 +224,50 @@ class QuadraticGauss(Scheme):
         args = [s, y0, y1, b, ue, T, pb.P]
         names = ["s", "y0", "y1", "b", "u_ends", "T", "P"]
         cost = self.stages.running_cost()
-        if nu:  # the controls are linear on an interval: 2-point Gauss (order 4)
-            L = h / 2 * sum(at(cost, float(c), u_at(float(c))) for c in GAUSS2)
-        else:
-            L = h * sum(float(w) * at(cost, float(c)) for c, w in zip(GAUSS3, GAUSS3_W))
+        # with controls of their own, linear on an interval, the collocation's Gauss rule
+        # (order4: 2 points, order 4); else the 3-point rule
+        points, weights = (self.collocation, self.collocation_weights) if nu else \
+            (GAUSS3, GAUSS3_W)
+        L = h * sum(float(w) * at(cost, float(c), u_at(float(c)))
+                    for c, w in zip(points, weights))
         phi, ineq = self.stages.constraints, self.stages.inequalities
-        Phi = ca.vertcat(*[h / 2 * at(phi, float(c), u_at(float(c))) for c in GAUSS2]) \
+        Phi = ca.vertcat(*[h * float(w) * at(phi, float(c), u_at(float(c))) for c, w in
+                           zip(self.collocation, self.collocation_weights)]) \
             if phi.numel() else ca.SX(0, 1)
         H = ca.vertcat(*[at(ineq, float(c), u_at(float(c))) for c in self.bound_times]) \
             if ineq.numel() else ca.SX(0, 1)
         #: ``interval(s_k, y_k, y_{k+1}, b_k, u_k, T, P) -> (L_d, Phi_d, H)``: Phi_d stacks
-        #: the two Gauss points, the bounds' expressions H the :attr:`bound_times`; u_k: the
+        #: the Gauss points, the bounds' expressions H the :attr:`bound_times`; u_k: the
         #: controls of their own at the interval's ends (empty when they are recovered)
         self.interval = ca.Function("interval", args, [L, Phi, H], names, ["L", "Phi", "H"])
         #: ``increment(y_k, y_{k+1}, b_k, T) -> W_k``, exponential coordinates of the step
         self.increment = ca.Function("increment", [y0, y1, b, T], [step],
                                      ["y0", "y1", "b", "T"], ["Theta"])
         u = self.stages.controls
-        #: controls at :data:`SAMPLES` of an interval (one-sided at its ends), stacked
+        #: controls at :attr:`samples` of an interval (one-sided at its ends), stacked
         self.control_samples = ca.Function(
             "control_samples", args,
-            [ca.vertcat(*[at(u, float(c), u_at(float(c))) for c in SAMPLES])], names, ["u"])
+            [ca.vertcat(*[at(u, float(c), u_at(float(c))) for c in self.samples])], names,
+            ["u"])
         if nu:
             assert self.stages.estimate is not None
             u1, u2 = (self.stages.estimate(G.step(s, self.retractions, theta(float(c))),
-                                           *quadratic(y0, y1, b, h, float(c)), pb.P,
-                                           ca.DM.zeros(nu)) for c in GAUSS2)
+                                           *velocity(float(c)), pb.P, ca.DM.zeros(nu))
+                      for c in GAUSS2)
             #: ``end_controls(s_k, y_k, y_{k+1}, b_k, T, P) -> u_k``: the line through the
             #: controls that best explain the motion at the Gauss points, at the interval's
             #: ends (the guesses' controls)
             self.end_controls = ca.Function("end_controls", args[:4] + args[5:], [ca.vertcat(
                 *[u1 + (u2 - u1) * (c - GAUSS2[0]) / (GAUSS2[1] - GAUSS2[0])
                   for c in (0.0, 1.0)])])
+
+    @staticmethod
+    def inner_step(G: Any, velocity: Any, c: float, h: ca.SX) -> ca.SX:
+        """Exponential coordinates of the step over ``[t_k, t_k + c h]``: the fourth-order
+        Magnus step from the velocity at its two Gauss points (local O(h^5); module
+        docstring)."""
+        ya, yb = (velocity(c * float(g))[0] for g in GAUSS2)
+        return G.magnus(ya, yb, c * h)
 
     def make_stages(self) -> Stages:
         """:class:`ControlLines` where every bound of the problem is on its recovered
@@ -251,7 +279,8 @@ class QuadraticGauss(Scheme):
     @property
     def n_stage(self) -> int:
         G = self.problem.groupoid
-        return (2 * self.N - 1) * G.algebra_dim + self.N * (G.state_size + 2 * self.stages.n_u)
+        return ((1 + self.bubbles) * self.N - 1) * G.algebra_dim + \
+            self.N * (G.state_size + 2 * self.stages.n_u)
 
     def index(self, layout: Layout) -> None:
         """x per interval k: ``b_k``, ``y_{k+1}`` (not the last: y_N is V_N), ``s_{k+1}``;
@@ -260,13 +289,14 @@ class QuadraticGauss(Scheme):
         dg, ds = G.algebra_dim, G.state_size
         self.layout = layout
         self.Y = np.zeros((dg, N + 1), dtype=np.int64)
-        self.B = np.zeros((dg, N), dtype=np.int64)
+        nb = self.bubbles * dg
+        self.B = np.zeros((nb, N), dtype=np.int64)
         self.states = np.zeros((ds, N + 1), dtype=np.int64)
         self.Y[:, 0], self.Y[:, N], self.states[:, 0] = layout.V0, layout.VN, layout.s0
         c = 0
         for k in range(N):
-            self.B[:, k] = layout.stage[c:c + dg]
-            c += dg
+            self.B[:, k] = layout.stage[c:c + nb]
+            c += nb
             if k < N - 1:
                 self.Y[:, k + 1] = layout.stage[c:c + dg]
                 c += dg
@@ -279,8 +309,9 @@ class QuadraticGauss(Scheme):
         G, N, lay = self.problem.groupoid, self.N, self.layout
         assert lay is not None
         ds, dg, npar = G.state_size, G.algebra_dim, self.problem.P.numel()
+        nb = self.bubbles * dg
         step, inc = self.stages.step, self.increment
-        recon = stage_function("recon", [ds, dg, dg, dg, ds, 1], lambda s, y0, y1, b, s1, T: (
+        recon = stage_function("recon", [ds, dg, dg, nb, ds, 1], lambda s, y0, y1, b, s1, T: (
             ca.SX(1, 1), s1 - step(s, inc(y0, y1, b, T))))
         comps = [f"{f.state}[{j}]" for f in G.factors for j in range(f.state_size)]
         cols = [self.states[:, :N], self.Y[:, :N], self.Y[:, 1:], self.B]
@@ -288,10 +319,10 @@ class QuadraticGauss(Scheme):
         blocks = [Block("recon", recon, columns(*cols, self.states[:, 1:], steps, ncols=N), 1,
                         Kind.RECONSTRUCTION, rows=[f"reconstruction {c}" for c in comps],
                         columns=[f"interval {k}" for k in range(N)],
-                        next=slice(ds + 3 * dg, 2 * ds + 3 * dg))]
-        return blocks + gauss_blocks(self, [ds, dg, dg, dg, 2 * self.stages.n_u, 1, npar],
+                        next=slice(ds + 2 * dg + nb, 2 * ds + 2 * dg + nb))]
+        return blocks + gauss_blocks(self, [ds, dg, dg, nb, 2 * self.stages.n_u, 1, npar],
                                      columns(*cols, self.UE, steps, lay.P, ncols=N),
-                                     "Gauss point")
+                                     "Gauss point", at=self.collocation)
 
     def _increments(self, Y: ca.MX, B: ca.MX, T: ca.MX) -> ca.MX:
         return self.increment.map(self.N)(Y[:, :-1], Y[:, 1:], B, T)
@@ -301,8 +332,8 @@ class QuadraticGauss(Scheme):
 
     def point(self, XI: ca.MX, pick: Pick) -> list[tuple[np.ndarray, ca.MX]]:
         """Node velocities: the mean of the adjacent interval velocities (prescribed ends
-        kept); bubbles: the quadratic's mean on each interval equals its interval velocity;
-        states by the scheme's own reconstruction."""
+        kept); bubbles: the velocity's mean on each interval equals its interval velocity
+        (the other bubbles of order6 zero); states by the scheme's own reconstruction."""
         lay, N = self.layout, self.N
         assert lay is not None
         Y = ca.horzcat(XI[:, 0], (XI[:, :-1] + XI[:, 1:]) / 2, XI[:, N - 1])
@@ -311,7 +342,8 @@ class QuadraticGauss(Scheme):
                 for idx, guess, given in ((lay.V0, Y[:, 0], pick(lay.V0)),
                                           (lay.VN, Y[:, N], pick(lay.VN)))]
         Y = ca.horzcat(ends[0], Y[:, 1:N], ends[1])
-        B = 1.5 * (XI - (Y[:, :-1] + Y[:, 1:]) / 2)  # mean = (y_k + y_{k+1})/2 + 2 b_k/3
+        B = ca.vertcat(1.5 * (XI - (Y[:, :-1] + Y[:, 1:]) / 2),  # mean: (y_k + y_{k+1})/2
+                       ca.MX.zeros((self.bubbles - 1) * XI.size1(), N))  # + 2 b_k/3
         H = local_horizons(self, pick)
         S = self.stages.step.mapaccum(N)(pick(lay.s0), self._increments(Y, B, H))
         parts = [(self.Y, Y), (self.B, B), (self.states[:, 1:], S)]
@@ -322,9 +354,9 @@ class QuadraticGauss(Scheme):
         return parts
 
     def readout(self, pick: Pick) -> Readout:
-        """Node velocities; controls sampled at :data:`SAMPLES` of each interval and the
-        cubics through them (one per interval: the controls jump with the rates at nodes; for
-        controls of their own, lines)."""
+        """Node velocities; controls sampled at :attr:`samples` of each interval and the
+        polynomials through them (cubics for order4, one per interval: the controls jump with
+        the rates at nodes; for controls of their own, lines)."""
         lay, N = self.layout, self.N
         assert lay is not None
         T, P = local_horizons(self, pick), pick(lay.P)
@@ -333,18 +365,20 @@ class QuadraticGauss(Scheme):
         S = ca.horzcat(pick(lay.s0), self.stages.step.mapaccum(N)(pick(lay.s0), steps))
         samples = self.control_samples.map(N)(S[:, :-1], Y[:, :-1], Y[:, 1:], B,
                                               pick(self.UE), T, P)
-        m = self.stages.controls.numel()
-        t_u = np.concatenate([(np.arange(N)[:, None] + SAMPLES[None, :3]).ravel() / N, [1.0]])
-        u = ca.horzcat(ca.reshape(samples[:3 * m, :], m, 3 * N), samples[3 * m:, -1]) if m \
-            else ca.MX(0, 3 * N + 1)
-        coeff = cubic_coefficients(samples, T / N) if m else ca.MX(0, N)
+        m, k = self.stages.controls.numel(), self.samples.size - 1
+        t_u = np.concatenate([(np.arange(N)[:, None] + self.samples[None, :k]).ravel() / N,
+                              [1.0]])
+        u = ca.horzcat(ca.reshape(samples[:k * m, :], m, k * N), samples[k * m:, -1]) if m \
+            else ca.MX(0, k * N + 1)
+        coeff = polynomial_coefficients(samples, self.samples, T / N) if m else ca.MX(0, N)
         return Readout(steps, S, np.arange(N + 1) / N, Y, t_u, u, np.arange(N + 1) / N, coeff)
 
     @property
     def velocity_groups(self) -> np.ndarray:
-        """Interval k: its bubble b_k and the velocity y_{k+1} at its end (the last interval:
-        its bubble twice, y_N being V_N)."""
-        Yend = np.hstack([self.Y[:, 1:-1], self.B[:, -1:]])
+        """Interval k: its bubbles b_k and the velocity y_{k+1} at its end (the last interval:
+        its first bubble twice, y_N being V_N)."""
+        dg = self.problem.groupoid.algebra_dim
+        Yend = np.hstack([self.Y[:, 1:-1], self.B[:dg, -1:]])
         return np.vstack([self.B, Yend]).T
 
     def unpack(self, w: np.ndarray) -> dict[str, np.ndarray]:
