@@ -40,6 +40,8 @@ def so3() -> dict[int, og.Solution]:
 def test_so3_converges_at_sixth_order(so3) -> None:
     """Cost and landing at order 6 (the landing's N = 32 is at the replay's own floor, ~3e-11,
     and left out of the orders); order4 lands 400-1000 times farther at the same N."""
+    assert og.compile_problem(rigid_body(), N=4, scheme="order6").transcription.scheme \
+        .cost_order == 6
     for sol in so3.values():
         assert_clean(sol)
         assert sol.discretization["scheme"] == "order6" and sol.iterations <= 10
@@ -106,6 +108,7 @@ def test_lines_land_at_sixth_order_and_cost_at_fourth() -> None:
     for N in (4, 8, 16, 32, 128):
         solver = og.compile_problem(pb, N=N, scheme="order6")
         assert isinstance(solver.transcription.scheme.stages, ControlLines)
+        assert solver.transcription.scheme.cost_order == 4  # what Richardson estimates use
         sols[N] = solver.solve()
         assert sols[N].success, (N, sols[N].status)
     landing = [replay_error(sols[N], "R") for N in (8, 16, 32)]

@@ -8,7 +8,7 @@ and meets the targets:
 
 * ``accuracy``: the relative cost error, estimated by Richardson from this grid and the
   previous one (:mod:`~ocgroupoid.verify.richardson`), ``|J_N - J_N/2| / (2^p - 1) / |J_N|``.
-  The order p is the scheme's (:attr:`~ocgroupoid.nlp.schemes.base.Scheme.accuracy`), at
+  The order p is the scheme's (:attr:`~ocgroupoid.nlp.schemes.base.Scheme.cost_order`), at
   most 2 when bounds are active on uniform steps (a switch inside an interval), lowered to
   the order observed, so that a grid outside the asymptotic regime is never
   trusted: the replay's terminal errors at both grids (the plan checked against the
@@ -128,7 +128,7 @@ class Run:
     """The search with one scheme."""
 
     scheme: str
-    order: int = 2  # the scheme's (Scheme.accuracy), read off its first grid
+    order: int = 2  # the scheme's (Scheme.cost_order), read off its first grid
     levels: list[Level] = field(default_factory=list)
     solution: Solution | None = None  # the grid chosen, or the best one reached
     met: bool = False
@@ -213,7 +213,7 @@ def _search(problem: Problem, scheme: str, search: Search, budget: float | None,
     while N <= search.N_max:
         t0 = time.perf_counter()
         solver, sol = _solve_grid(problem, scheme, N, search, seed, progress)
-        run.order = solver.transcription.scheme.accuracy
+        run.order = solver.transcription.scheme.cost_order
         rep = sol.diagnostics.get("replay", {})
         replay_error = rep.get("max_terminal_error") if rep.get("available") else None
         est = _estimate(run.levels, sol, replay_error, run.order)

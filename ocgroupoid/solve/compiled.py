@@ -316,7 +316,7 @@ class CompiledProblem:
             solution = replace(solution, hint="; ".join([*notes, *filter(None, [solution.hint])]))
         if coarse is not None and coarse[1].success and best.success and \
                 tr is self.transcription:  # Richardson from the last continuation grid
-            order = tr.scheme.accuracy
+            order = tr.scheme.cost_order
             solution.diagnostics["error_estimate"] = richardson.estimate(
                 best.cost, coarse[1].cost, tr.N, coarse[0].N, order, order)
         return replace(solution, starts=len(results),

@@ -103,7 +103,7 @@ def verdict(tr: Transcription, r: RawResult, out: dict[str, np.ndarray],
                 failures.append(f"{name} {what} {value:.2g} (more than {tol:.0e})")
     failures += dependent_conditions(tr, r.x, r.p)
     failures += tr.scheme.troubles(np.concatenate([r.x, r.p]))
-    order = tr.scheme.accuracy
+    order = tr.scheme.cost_order
     rep = d.get("replay")
     if rep is None:
         failures.append("not verified: the plan was not checked against the continuous "

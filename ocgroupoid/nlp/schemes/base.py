@@ -94,6 +94,12 @@ class Scheme(ABC):
     problem_order: ClassVar[int]  # 2: second-order problems (Ltilde); 1: first-order (l)
     summary: ClassVar[str]
 
+    @property
+    def cost_order(self) -> int:
+        """The order at which this instance's cost converges, for Richardson estimates:
+        :attr:`accuracy`, unless its stages limit it (:class:`~.order6.CubicGauss`)."""
+        return self.accuracy
+
     #: w-indices set by :meth:`index`
     states: np.ndarray  # ds x (N+1) node states
     end_velocity: np.ndarray  # dim y: the velocity at t = T (final conditions read it)
