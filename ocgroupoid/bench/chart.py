@@ -21,11 +21,13 @@ from .methods import Method
 
 #: method label -> (colour, line style, marker); ours solid, the baselines dashed
 STYLES = {"order2": ("tab:blue", "-", "o"), "order4": ("tab:green", "-", "s"),
+          "order6": ("magenta", "-", "h"),
           "order2:exp": ("tab:cyan", "-.", "D"), "order4:exp": ("olive", "-.", "P"),
           "order2:first_order": ("tab:gray", ":", "h"),
           "rk4_quat": ("tab:red", "--", "^"), "rk4_matrix": ("tab:orange", "--", "v"),
           "rk4_euler": ("tab:purple", "--", "X")}
 NAMES = {"order2": "ours: order2 (cayley)", "order4": "ours: order4 (cayley)",
+         "order6": "ours: order6 (cayley)",
          "order2:exp": "ours: order2 (exp)", "order4:exp": "ours: order4 (exp)",
          "order2:first_order": "ours: order2 (first_order)",
          "rk4_quat": "RK4 shooting, quaternions", "rk4_matrix": "RK4 shooting, matrices",
@@ -37,6 +39,8 @@ SHADES = {"order2": {"+jit": "navy", "@fatrop": "deepskyblue", "@fatrop+jit": "d
           "order4": {"+jit": "darkgreen", "@fatrop": "yellowgreen",
                      "@fatrop+jit": "saddlebrown", "+jit+coarse": "teal",
                      "@fatrop+jit+coarse": "darkorange"},
+          "order6": {"+jit": "mediumvioletred", "@fatrop": "orchid", "@fatrop+jit": "black",
+                     "+jit+coarse": "indigo", "@fatrop+jit+coarse": "dimgray"},
           "rk4_quat": {"+jit": "darkred", "@fatrop": "salmon", "@fatrop+jit": "maroon",
                        "+jit+coarse": "deeppink"}}
 VARIANT_MARKERS = {"+jit": "D", "@fatrop": "v", "@fatrop+jit": "*", "+jit+coarse": "p",

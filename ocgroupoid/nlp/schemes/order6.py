@@ -27,10 +27,10 @@ active): landing 4.9e-7, 7.6e-9, 1.2e-10 at N = 8, 16, 32, cost orders 3.78, 3.9
 the quadrotor (thrust and torques of their own): landing 5.1e-6, 8.7e-8, 1.5e-9 at N = 16,
 32, 64, the cost error falling 16 times per doubling.
 
-Measured (work-precision runs of so3_rest_to_rest, one run, 2026-12-02, replay through
-scipy's DOP853): the relative cost error 5.3e-7, 8.5e-9, 1.3e-10 at N = 8, 16, 32 (order4
-1.1e-4, 7.6e-6, 4.8e-7), the landing 2.3e-8, 3.0e-10, 2.4e-11 (order4 4.4e-5, 2.7e-6,
-1.7e-7), each solve in the same 4 iterations as order4's at 1.0-1.25 times its time.
+Measured (the work-precision run of so3_rest_to_rest, 2026-12-02, docs/benchmarks): the
+relative cost error 5.3e-7, 8.5e-9, 1.4e-10 at N = 8, 16, 32 (order4 1.1e-4, 7.6e-6,
+4.8e-7), the landing 3.7e-8, 5.9e-10, 3.0e-11 (order4 4.4e-5, 2.7e-6, 1.7e-7), each solve in
+the same 4 iterations as order4's at 1.0-1.2 times its time with fatrop.
 """
 
 from __future__ import annotations
