@@ -22,7 +22,7 @@ def check(
     Exits 2 when the file is invalid or a boundary condition is redundant.
     """
     from .. import files
-    from ..solve.accuracy import AUTO_SCHEMES
+    from ..solve.accuracy import AUTO_BUILT
     from ..solve.checks import check as run_check
 
     try:
@@ -30,9 +30,9 @@ def check(
         f = cfg.file
         d = f.discretization
         problem = files.build(cfg)
-        # N: auto is checked on its first grid, with the first scheme scheme: auto tries
+        # N: auto is checked on its first grid; scheme: auto with the scheme every problem has
         N = f.horizon.grids[0] if f.horizon.N == "auto" else f.horizon.N
-        scheme = AUTO_SCHEMES[0] if d.scheme == "auto" else d.scheme
+        scheme = AUTO_BUILT if d.scheme == "auto" else d.scheme
         report = run_check(problem, N, d.retraction, d.rule, f.solver.ipopt, scheme, d.steps)
     except OcgError as e:
         fail(str(e))

@@ -12,19 +12,19 @@ from ..errors import ConfigError
 from ..model.problem import Problem
 from ..nlp.method import Method
 from ..nlp.options import SolverOptions
-from ..solve.accuracy import AUTO_SCHEMES
+from ..solve.accuracy import AUTO_BUILT
 from .load import Config, build
 
 
 def method(cfg: Config) -> Method:
     """The method of a problem file: ``horizon.N`` and the ``discretization`` section. With
     ``horizon.N: auto``, the first grid of the search (``horizon.N_min``) and, with
-    ``scheme: auto``, the first scheme it tries
-    (:data:`~ocgroupoid.solve.accuracy.AUTO_SCHEMES`)."""
+    ``scheme: auto``, the scheme every problem has (:data:`~ocgroupoid.solve.accuracy.AUTO_BUILT`;
+    the search itself tries each of :func:`~ocgroupoid.solve.accuracy.auto_schemes`)."""
     f = cfg.file
     d = f.discretization
     N = f.horizon.grids[0] if f.horizon.N == "auto" else f.horizon.N
-    scheme = AUTO_SCHEMES[0] if d.scheme == "auto" else d.scheme
+    scheme = AUTO_BUILT if d.scheme == "auto" else d.scheme
     try:
         return Method(N, scheme=scheme, retraction=d.retraction, rule=d.rule, steps=d.steps,
                       bound_points=d.bound_points)
