@@ -21,7 +21,7 @@ from ..lie.rn import Rn
 from ..model.problem import Problem
 from ..nlp.method import DEFAULT_RETRACTION, Method as Discretisation
 from ..nlp.options import BACKENDS, DEFAULT_BACKEND, MAX_SECONDS, SolverOptions
-from ..nlp.schemes import BASELINES, DEFAULT_RULE, SCHEME_NAMES, SCHEMES
+from ..nlp.schemes import BASELINES, DEFAULT_RULE, SCHEME_NAMES, has_rule
 from ..nlp.schemes.coordinates import coordinates
 
 #: a ``+coarse`` method on N intervals solves on N / COARSE_FACTOR first (plate_ball,
@@ -96,9 +96,10 @@ class Method:
 
 #: ours (order2 with cayley and exp), then the baselines
 OURS_DEFAULT = (Method("order2"), Method("order4"), Method("order6"), Method("order2", "exp"))
-WORK_PRECISION = (*OURS_DEFAULT, Method("rk4_quat"), Method("rk4_matrix"), Method("rk4_euler"))
+BASELINES_DEFAULT = (Method("rk4_quat"), Method("rk4_matrix"), Method("rk4_euler"))
+WORK_PRECISION = (*OURS_DEFAULT, *BASELINES_DEFAULT)
 #: the same and the first-order retraction (SO(3) problems only)
-STABILITY = (*OURS_DEFAULT, Method("order2", "first_order"), *WORK_PRECISION[len(OURS_DEFAULT):])
+STABILITY = (*OURS_DEFAULT, Method("order2", "first_order"), *BASELINES_DEFAULT)
 
 
 def parse_methods(text: str | None, default: tuple[Method, ...]) -> list[Method]:
@@ -172,7 +173,7 @@ def left_out(methods: list[Method], problem: Problem) -> dict[str, str]:
     out = {}
     for m in methods:
         quat, cayley = replace(m, scheme="rk4_quat"), replace(m, retraction=DEFAULT_RETRACTION)
-        if problem.order not in SCHEMES[m.scheme]:
+        if not has_rule(m.scheme, problem.order):
             out[m.label] = f"{m.scheme} has no rule for order-{problem.order} problems"
         elif m.baseline and m.scheme != "rk4_quat" and not own_coordinates and quat in present:
             out[m.label] = f"identical to {quat.label} here: no SO(3) factor to carry " \

@@ -40,7 +40,7 @@ from ..errors import ConfigError
 from ..model.problem import Problem
 from ..nlp.method import Method
 from ..nlp.options import SolverOptions
-from ..nlp.schemes import SCHEME_NAMES, SCHEMES
+from ..nlp.schemes import SCHEME_NAMES, has_rule
 from ..nlp.shortcuts import choose
 from ..verify.diagnostics import replay_of
 from ..verify.richardson import estimate as richardson_estimate, observed_order
@@ -54,7 +54,7 @@ AUTO_SCHEMES = ("order6", "order4", "order2")
 #: what a file's ``scheme: auto`` builds where no search runs (``ocgroupoid check`` and
 #: ``export-c`` on the first grid of ``N: auto``, sweeps): the first of :data:`AUTO_SCHEMES`
 #: with a rule for every problem (order4)
-AUTO_BUILT = next(n for n in AUTO_SCHEMES if set(SCHEMES[n]) >= {1, 2})
+AUTO_BUILT = next(n for n in AUTO_SCHEMES if has_rule(n, 1) and has_rule(n, 2))
 #: the first and the largest grid of the search (defaults of horizon.N_min and N_max)
 N_MIN, N_MAX = 8, 1024
 #: the loosest relative cost error asked for: beyond it Richardson's leading term is no guide
@@ -66,7 +66,7 @@ ORDER_FLOOR = 0.5
 def auto_schemes(problem_order: int) -> tuple[str, ...]:
     """The schemes ``scheme="auto"`` tries on a problem of this order (1 or 2), in order:
     :data:`AUTO_SCHEMES` with a rule for it."""
-    return tuple(n for n in AUTO_SCHEMES if problem_order in SCHEMES[n])
+    return tuple(n for n in AUTO_SCHEMES if has_rule(n, problem_order))
 
 
 def check_target(accuracy: float | None, replay_accuracy: float | None) -> None:

@@ -26,6 +26,12 @@ SCHEME_NAMES = tuple(SCHEMES)
 DEFAULT_SCHEME = "order2"
 
 
+def has_rule(name: str, problem_order: int) -> bool:
+    """Whether the scheme called ``name`` has a rule for problems of this order (1 or 2):
+    order6 has none for first-order problems."""
+    return problem_order in SCHEMES[name]
+
+
 def make_scheme(name: str, problem: Problem, N: int, retraction: str, rule: str,
                 bound_points: int = 0) -> Scheme:
     """The scheme called ``name`` for ``problem`` (its class depends on the problem order);
@@ -33,8 +39,8 @@ def make_scheme(name: str, problem: Problem, N: int, retraction: str, rule: str,
     if name not in SCHEMES:
         raise ConfigError(f"unknown scheme {name!r}; choose one of {', '.join(SCHEME_NAMES)}")
     by_order = SCHEMES[name]
-    if problem.order not in by_order:
-        others = [n for n, b in SCHEMES.items() if problem.order in b and n not in BASELINES]
+    if not has_rule(name, problem.order):
+        others = [n for n in SCHEMES if has_rule(n, problem.order) and n not in BASELINES]
         raise ConfigError(f"scheme {name!r} has no rule for order-{problem.order} problems "
                           f"(this one's velocities are its controls): choose "
                           f"{' or '.join(others)}")
@@ -49,5 +55,5 @@ def make_scheme(name: str, problem: Problem, N: int, retraction: str, rule: str,
 
 
 __all__ = ["Scheme", "Readout", "Node", "NodeMidpoint", "IntervalMidpoint", "QuadraticGauss",
-           "CubicGauss", "GaussStages", "SCHEMES", "BASELINES",
+           "CubicGauss", "GaussStages", "SCHEMES", "BASELINES", "has_rule",
            "SCHEME_NAMES", "DEFAULT_SCHEME", "DEFAULT_RULE", "make_scheme"]

@@ -41,7 +41,7 @@ def cubic(y0: Any, y1: Any, b: Any, h: Any, tau: float) -> tuple[Any, Any]:
     ``b = (b1, b2)`` (stacked): ``y = (1 - tau) y0 + tau y1 + 4 tau (1 - tau) (b1 + b2 (2 tau
     - 1))``, b1 the value at the midpoint minus the mean of the ends (as order4's bubble), b2
     the odd cubic part."""
-    n = y0.numel() if hasattr(y0, "numel") else np.size(y0)
+    n = b.shape[0] // 2
     b1, b2 = b[:n], b[n:]
     w = b1 + (2 * tau - 1) * b2
     y = (1 - tau) * y0 + tau * y1 + 4 * tau * (1 - tau) * w

@@ -66,6 +66,7 @@ First-order problems: :class:`~ocgroupoid.nlp.schemes.gauss_stages.GaussStages`.
 
 from __future__ import annotations
 
+from functools import lru_cache
 from typing import TYPE_CHECKING, Any, ClassVar
 
 import casadi as ca
@@ -195,6 +196,10 @@ class QuadraticGauss(Scheme):
         T = ca.SX.sym("T")
         h = T / N
 
+        # each point's velocity, step and state built once: the cost, Phi, the bounds and
+        # the samples read the same points (the cart-pole's interval: 846 -> 666
+        # instructions with order6, 488 -> 460 with order4)
+        @lru_cache(maxsize=None)
         def velocity(tau: float) -> tuple[ca.SX, ca.SX]:
             return self.velocity(y0, y1, b, h, tau)
 
@@ -202,6 +207,7 @@ class QuadraticGauss(Scheme):
         g1, g2, g3 = (velocity(float(g))[0] for g in GAUSS3)
         step = G.magnus6(g1, g2, g3, h)
 
+        @lru_cache(maxsize=None)
         def theta(c: float) -> ca.SX:
             """Exponential coordinates of the step to t_k + c h: inside the interval
             :meth:`inner_step`, at its end the node's."""
@@ -211,10 +217,13 @@ class QuadraticGauss(Scheme):
                 return step
             return self.inner_step(G, velocity, c, h)
 
+        @lru_cache(maxsize=None)
+        def state(c: float) -> ca.SX:
+            return G.step(s, self.retractions, theta(c))
+
         def at(expr: ca.SX, tau: float, u: ca.SX | None = None) -> ca.SX:
             y, dy = velocity(tau)
-            return self.stages.at([expr], G.step(s, self.retractions, theta(tau)), y, dy,
-                                  u)[0]
+            return self.stages.at([expr], state(tau), y, dy, u)[0]
 
         # controls of their own: linear on the interval, their variables its end values
         # (module docstring); every point reads the line
@@ -251,7 +260,7 @@ class QuadraticGauss(Scheme):
             ["u"])
         if nu:
             assert self.stages.estimate is not None
-            u1, u2 = (self.stages.estimate(G.step(s, self.retractions, theta(float(c))),
+            u1, u2 = (self.stages.estimate(state(float(c)),
                                            *velocity(float(c)), pb.P, ca.DM.zeros(nu))
                       for c in GAUSS2)
             #: ``end_controls(s_k, y_k, y_{k+1}, b_k, T, P) -> u_k``: the line through the
