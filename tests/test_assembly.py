@@ -8,7 +8,6 @@ import numpy as np
 import pytest
 
 import ocgroupoid as og
-from ocgroupoid.nlp.schemes import has_rule
 from ocgroupoid.systems.heavy_top import heavy_top
 from ocgroupoid.systems.plate_ball import plate_ball
 from ocgroupoid.systems.rigid_body import rigid_body
@@ -34,8 +33,6 @@ def reference(tr) -> ca.Function:
 def test_scattered_derivatives_equal_automatic_differentiation(factory, N: int,
                                                                scheme: str) -> None:
     problem = factory()
-    if not has_rule(scheme, problem.order):  # order6 has no first-order rule
-        pytest.skip(f"{scheme} has no rule for order-{problem.order} problems")
     tr = og.compile_problem(problem, N=N, scheme=scheme).transcription
     p = tr.pack()
     rng = np.random.default_rng(N)
@@ -78,8 +75,6 @@ def test_whole_lagrangian_equals_automatic_differentiation(factory, scheme: str)
     Hessian, summed from the stages, equal CasADi's AD of the plain graph."""
     from ocgroupoid.nlp.assembly import assemble
     problem = factory()
-    if not has_rule(scheme, problem.order):  # order6 has no first-order rule
-        pytest.skip(f"{scheme} has no rule for order-{problem.order} problems")
     tr = og.compile_problem(problem, N=5, scheme=scheme).transcription
     x, p = tr.nlp["x"], tr.nlp["p"]
     fns = assemble(tr.blocks, ca.MX.sym("x", tr.nx), ca.MX.sym("p", tr.np), whole=True)

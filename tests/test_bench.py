@@ -115,9 +115,6 @@ def test_methods_name_their_backend_and_compiled_evaluation() -> None:
     assert left_out(methods, plane) == {
         "order2:exp@fatrop": "identical to order2@fatrop here: every retraction is the "
                              "translation on R^n"}
-    ball = files.build(files.load(ROOT / "problems" / "plate_ball.yaml"))
-    assert left_out([*methods, Method("order6")], ball)["order6"] == \
-        "order6 has no rule for order-1 problems"
 
 
 @pytest.mark.parametrize("command", ["work-precision", "stability"])

@@ -7,7 +7,6 @@ import numpy as np
 import pytest
 
 import ocgroupoid as og
-from ocgroupoid.nlp.schemes import has_rule
 from ocgroupoid.systems.rigid_body import rigid_body
 
 from .test_api_general import minimum_acceleration, rolling_problem
@@ -26,8 +25,6 @@ def free_end_velocity() -> og.Problem:
 @pytest.mark.parametrize("scheme", og.nlp.SCHEME_NAMES)
 def test_every_variable_is_used_and_licq_holds(factory, scheme: str) -> None:
     problem = factory()
-    if not has_rule(scheme, problem.order):  # order6 has no first-order rule
-        pytest.skip(f"{scheme} has no rule for order-{problem.order} problems")
     solver = og.compile_problem(problem, N=16, scheme=scheme)
     tr = solver.transcription
     sol = solver.solve(multistart=factory is rolling)

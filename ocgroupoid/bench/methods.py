@@ -21,7 +21,7 @@ from ..lie.rn import Rn
 from ..model.problem import Problem
 from ..nlp.method import DEFAULT_RETRACTION, Method as Discretisation
 from ..nlp.options import BACKENDS, DEFAULT_BACKEND, MAX_SECONDS, SolverOptions
-from ..nlp.schemes import BASELINES, DEFAULT_RULE, SCHEME_NAMES, has_rule
+from ..nlp.schemes import BASELINES, DEFAULT_RULE, SCHEME_NAMES
 from ..nlp.schemes.coordinates import coordinates
 
 #: a ``+coarse`` method on N intervals solves on N / COARSE_FACTOR first (plate_ball,
@@ -162,8 +162,7 @@ def parse_floats(text: str | None, default: tuple[float, ...], option: str) -> l
 
 
 def left_out(methods: list[Method], problem: Problem) -> dict[str, str]:
-    """Methods not run on ``problem``, with the reason: a scheme without a rule for its order
-    (order6 on a first-order problem), and those that would repeat another one's
+    """Methods not run on ``problem``, with the reason: those that would repeat another one's
     computation (the matrix and Euler baselines equal rk4_quat without an SO(3) factor, and
     every retraction equals cayley on R^n factors)."""
     factors = problem.groupoid.factors
@@ -173,9 +172,7 @@ def left_out(methods: list[Method], problem: Problem) -> dict[str, str]:
     out = {}
     for m in methods:
         quat, cayley = replace(m, scheme="rk4_quat"), replace(m, retraction=DEFAULT_RETRACTION)
-        if not has_rule(m.scheme, problem.order):
-            out[m.label] = f"{m.scheme} has no rule for order-{problem.order} problems"
-        elif m.baseline and m.scheme != "rk4_quat" and not own_coordinates and quat in present:
+        if m.baseline and m.scheme != "rk4_quat" and not own_coordinates and quat in present:
             out[m.label] = f"identical to {quat.label} here: no SO(3) factor to carry " \
                            "otherwise"
         elif not m.baseline and m.retraction != DEFAULT_RETRACTION and not curved and \

@@ -19,8 +19,8 @@ from .load import Config, build
 def method(cfg: Config) -> Method:
     """The method of a problem file: ``horizon.N`` and the ``discretization`` section. With
     ``horizon.N: auto``, the first grid of the search (``horizon.N_min``) and, with
-    ``scheme: auto``, the scheme every problem has (:data:`~ocgroupoid.solve.accuracy.AUTO_BUILT`;
-    the search itself tries each of :func:`~ocgroupoid.solve.accuracy.auto_schemes`)."""
+    ``scheme: auto``, :data:`~ocgroupoid.solve.accuracy.AUTO_BUILT` (the search itself tries
+    each of :data:`~ocgroupoid.solve.accuracy.AUTO_SCHEMES`)."""
     f = cfg.file
     d = f.discretization
     N = f.horizon.grids[0] if f.horizon.N == "auto" else f.horizon.N

@@ -22,8 +22,7 @@ and meets the targets:
 The estimate checked is the finer grid's, so the grid chosen is at most twice the smallest
 grid of the sequence that meets the target (in the asymptotic regime). ``scheme="auto"``
 searches with each of :data:`AUTO_SCHEMES` and keeps whichever meets the targets with less
-IPOPT time (a later search stops once it has spent more); a scheme without a rule for the
-problem's order is left out (:func:`auto_schemes`: order6 on first-order problems). The
+IPOPT time (a later search stops once it has spent more). The
 Solution reports the search in ``diagnostics["accuracy"]`` (every grid: cost, estimate,
 replay error, time) and its own error in ``diagnostics["error_estimate"]``
 (:attr:`Solution.error_estimate`).
@@ -40,7 +39,7 @@ from ..errors import ConfigError
 from ..model.problem import Problem
 from ..nlp.method import Method
 from ..nlp.options import SolverOptions
-from ..nlp.schemes import SCHEME_NAMES, has_rule
+from ..nlp.schemes import SCHEME_NAMES
 from ..nlp.shortcuts import choose
 from ..verify.diagnostics import replay_of
 from ..verify.richardson import estimate as richardson_estimate, observed_order
@@ -48,25 +47,18 @@ from .compiled import CompiledProblem, Progress
 from .guesses import interpolate
 from .solution import Solution
 
-#: the schemes ``scheme="auto"`` tries, in this order, where they have a rule for the problem
-#: (:func:`auto_schemes`)
+#: the schemes ``scheme="auto"`` tries, in this order
 AUTO_SCHEMES = ("order6", "order4", "order2")
 #: what a file's ``scheme: auto`` builds where no search runs (``ocgroupoid check`` and
-#: ``export-c`` on the first grid of ``N: auto``, sweeps): the first of :data:`AUTO_SCHEMES`
-#: with a rule for every problem (order4)
-AUTO_BUILT = next(n for n in AUTO_SCHEMES if has_rule(n, 1) and has_rule(n, 2))
+#: ``export-c`` on the first grid of ``N: auto``, sweeps): order4, as a file with a fixed N
+#: gets (``files.schema.FILE_SCHEME``)
+AUTO_BUILT = "order4"
 #: the first and the largest grid of the search (defaults of horizon.N_min and N_max)
 N_MIN, N_MAX = 8, 1024
 #: the loosest relative cost error asked for: beyond it Richardson's leading term is no guide
 ACCURACY_MAX = 0.1
 #: an observed order at or below this is no convergence: no estimate on that grid
 ORDER_FLOOR = 0.5
-
-
-def auto_schemes(problem_order: int) -> tuple[str, ...]:
-    """The schemes ``scheme="auto"`` tries on a problem of this order (1 or 2), in order:
-    :data:`AUTO_SCHEMES` with a rule for it."""
-    return tuple(n for n in AUTO_SCHEMES if has_rule(n, problem_order))
 
 
 def check_target(accuracy: float | None, replay_accuracy: float | None) -> None:
@@ -335,7 +327,7 @@ def solve_to_accuracy(problem: Problem, accuracy: float | None = None,
     t0 = time.perf_counter()
     runs: list[Run] = []
     budget: float | None = None
-    for name in auto_schemes(problem.order) if scheme == "auto" else (scheme,):
+    for name in AUTO_SCHEMES if scheme == "auto" else (scheme,):
         run = _search(problem, name, search, budget, progress or _quiet, report or _quiet)
         runs.append(run)
         if run.met:

@@ -117,17 +117,21 @@ def _rowmax(A: ca.MX) -> ca.MX:
 
 
 def _velocity_coefficients(tv: ca.MX, V: ca.MX, t: ca.MX, N: int) -> ca.MX:
-    """:func:`~ocgroupoid.verify.replay.velocity_ppoly` as a graph: per interval a constant
-    (one sample) or the line through its two samples; rows ``power * m + component``."""
+    """:func:`~ocgroupoid.verify.replay.velocity_ppoly` as a graph: per interval the
+    polynomial through its k velocity samples (one: a constant; two: a line; three: a
+    quadratic), from its Newton form; rows ``power * m + component``, highest power first."""
     k = tv.size2() // N
-    if k == 1:
-        return V
-    idx1, idx2 = list(range(0, 2 * N, 2)), list(range(1, 2 * N, 2))
-    t1, t2 = tv[:, idx1], tv[:, idx2]
-    v1, v2 = V[:, idx1], V[:, idx2]
     m = V.size1()
-    slope = (v2 - v1) / ca.repmat(t2 - t1, m, 1)
-    return ca.vertcat(slope, v1 - slope * ca.repmat(t1 - t[:, :-1], m, 1))
+    a = [ca.repmat(tv[:, i::k] - t[:, :-1], m, 1) for i in range(k)]  # sample times in t - t_k
+    d = [V[:, i::k] for i in range(k)]  # divided differences, built in place
+    for j in range(1, k):
+        for i in range(k - 1, j - 1, -1):
+            d[i] = (d[i] - d[i - 1]) / (a[i] - a[i - j])
+    coeff = [d[k - 1]]  # Horner: multiply by (x - a_j) and add d_j, low powers first
+    for j in range(k - 2, -1, -1):
+        coeff = [-a[j] * coeff[0] + d[j]] + \
+            [coeff[p - 1] - a[j] * coeff[p] for p in range(1, len(coeff))] + [coeff[-1]]
+    return ca.vertcat(*coeff[::-1])
 
 
 def _landing(tr: Transcription, states: ca.MX, velocities: ca.MX, steps: ca.MX, s: ca.MX,

@@ -5,7 +5,7 @@ from __future__ import annotations
 from ...errors import ConfigError
 from ...model.problem import Problem
 from .base import DEFAULT_RULE, Readout, Scheme
-from .gauss_stages import GaussStages
+from .gauss_stages import GaussStages, GaussStages3
 from .order2 import IntervalMidpoint, Node, NodeMidpoint
 from .order4 import QuadraticGauss
 from .order6 import CubicGauss
@@ -15,7 +15,7 @@ from .shooting import RK4Euler, RK4Matrix, RK4Quaternion
 SCHEMES: dict[str, dict[int, type[Scheme]]] = {
     "order2": {2: NodeMidpoint, 1: IntervalMidpoint},
     "order4": {2: QuadraticGauss, 1: GaussStages},
-    "order6": {2: CubicGauss},
+    "order6": {2: CubicGauss, 1: GaussStages3},
     "rk4_quat": {2: RK4Quaternion, 1: RK4Quaternion},
     "rk4_matrix": {2: RK4Matrix, 1: RK4Matrix},
     "rk4_euler": {2: RK4Euler, 1: RK4Euler},
@@ -26,25 +26,13 @@ SCHEME_NAMES = tuple(SCHEMES)
 DEFAULT_SCHEME = "order2"
 
 
-def has_rule(name: str, problem_order: int) -> bool:
-    """Whether the scheme called ``name`` has a rule for problems of this order (1 or 2):
-    order6 has none for first-order problems."""
-    return problem_order in SCHEMES[name]
-
-
 def make_scheme(name: str, problem: Problem, N: int, retraction: str, rule: str,
                 bound_points: int = 0) -> Scheme:
     """The scheme called ``name`` for ``problem`` (its class depends on the problem order);
     ``bound_points`` more points per interval where the bounds hold (order4 and order6)."""
     if name not in SCHEMES:
         raise ConfigError(f"unknown scheme {name!r}; choose one of {', '.join(SCHEME_NAMES)}")
-    by_order = SCHEMES[name]
-    if not has_rule(name, problem.order):
-        others = [n for n in SCHEMES if has_rule(n, problem.order) and n not in BASELINES]
-        raise ConfigError(f"scheme {name!r} has no rule for order-{problem.order} problems "
-                          f"(this one's velocities are its controls): choose "
-                          f"{' or '.join(others)}")
-    cls = by_order[problem.order]
+    cls = SCHEMES[name][problem.order]
     if bound_points and not cls.adaptive_steps:
         raise ConfigError(f"discretization.bound_points imposes the bounds at more points "
                           f"inside order4's and order6's intervals; {name} evaluates them at "
@@ -55,5 +43,5 @@ def make_scheme(name: str, problem: Problem, N: int, retraction: str, rule: str,
 
 
 __all__ = ["Scheme", "Readout", "Node", "NodeMidpoint", "IntervalMidpoint", "QuadraticGauss",
-           "CubicGauss", "GaussStages", "SCHEMES", "BASELINES", "has_rule",
+           "CubicGauss", "GaussStages", "GaussStages3", "SCHEMES", "BASELINES",
            "SCHEME_NAMES", "DEFAULT_SCHEME", "DEFAULT_RULE", "make_scheme"]

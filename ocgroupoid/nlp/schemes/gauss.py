@@ -1,6 +1,7 @@
-"""The numbers of order4 and order6: Gauss-Legendre points and weights on [0, 1], where their
-bounds hold and their controls are sampled, and the polynomials their read-outs report (the
-quadratic or cubic velocity of an interval, the controls through its samples, lines)."""
+"""The numbers of order4 and order6: Gauss-Legendre points and weights on [0, 1], their
+collocation (Runge-Kutta) matrices, where their bounds hold and their controls are sampled,
+and the polynomials their read-outs report (the quadratic or cubic velocity of an interval,
+the controls through its samples, lines)."""
 
 from __future__ import annotations
 
@@ -11,9 +12,30 @@ import numpy as np
 
 SQRT3, SQRT15 = float(np.sqrt(3.0)), float(np.sqrt(15.0))
 GAUSS2 = np.array([0.5 - SQRT3 / 6, 0.5 + SQRT3 / 6])  # nodes of the 2-point rule on [0, 1]
-GAUSS2_A = np.array([[0.25, 0.25 - SQRT3 / 6], [0.25 + SQRT3 / 6, 0.25]])  # its RK matrix
 GAUSS3 = np.array([0.5 - SQRT15 / 10, 0.5, 0.5 + SQRT15 / 10])
 GAUSS3_W = np.array([5.0, 8.0, 5.0]) / 18.0
+
+
+def lagrange_integrals(nodes: np.ndarray, c: float) -> np.ndarray:
+    """``int_0^c l_j(tau) dtau`` for the Lagrange basis ``l_j`` of ``nodes``: the weights
+    that turn the stage rates of a collocation polynomial into its coordinates at ``c``
+    (at ``c = c_i`` the row i of the collocation method's Runge-Kutta matrix, Hairer-Wanner
+    II.7 (7.5))."""
+    k = nodes.size
+    V_inv = np.linalg.inv(np.vander(nodes, k, increasing=True))  # l_j = sum_p V_inv[p, j] t^p
+    return np.array([sum(V_inv[p, j] * c ** (p + 1) / (p + 1) for p in range(k))
+                     for j in range(k)])
+
+
+def lagrange_values(nodes: np.ndarray, c: float) -> np.ndarray:
+    """``l_j(c)`` for the Lagrange basis of ``nodes``: the stage rates' weights in the
+    collocation polynomial's rate at ``c``."""
+    return np.array([np.prod([(c - m) / (n - m) for m in nodes if m != n]) for n in nodes])
+
+
+#: the Runge-Kutta matrices of the 2- and 3-stage Gauss methods
+GAUSS2_A = np.array([lagrange_integrals(GAUSS2, float(c)) for c in GAUSS2])
+GAUSS3_A = np.array([lagrange_integrals(GAUSS3, float(c)) for c in GAUSS3])
 #: where bounds hold on each interval: both ends and the Gauss points (a control that is
 #: linear on an interval then respects them everywhere; bounding only at the Gauss points
 #: let adaptive steps stretch a linear control beyond its limit between them)
@@ -61,14 +83,6 @@ def polynomial_coefficients(samples: Any, at: np.ndarray, h: Any) -> Any:
     blocks = [samples[i * m:(i + 1) * m, :] for i in range(k)]
     alpha = [sum(float(V_inv[j, i]) * blocks[i] for i in range(k)) for j in range(k)]
     return ca.vertcat(*[alpha[j] / H**j for j in range(k - 1, -1, -1)])
-
-
-def linear_coefficients(u0: Any, u1: Any, t0: float, t1: float, h: Any) -> Any:
-    """PPoly coefficients of the lines through u0 at t_k + t0 h and u1 at t_k + t1 h, in
-    t - t_k (rows: slope block, then value block), for steps h (1 x N)."""
-    H = ca.repmat(h, u0.size1(), 1)
-    slope = (u1 - u0) / ((t1 - t0) * H)
-    return ca.vertcat(slope, u0 - slope * t0 * H)
 
 
 def bound_times(extra: int, points: np.ndarray = BOUND_POINTS) -> np.ndarray:

@@ -1,17 +1,21 @@
-"""Fourth-order scheme (``order4``) of first-order problems.
+"""Fourth- and sixth-order schemes (``order4``, ``order6``) of first-order problems.
 
-First-order problems (:class:`GaussStages`): the seed's Runge-Kutta discrete Lagrangian
-(003, §5.4) with the two-stage Gauss method (order 4). The NLP variables of interval k are
-the coordinate rates ``eta_i`` at the stages ``c_i``; the stage coordinates are
-``xi_i = h sum_j a_ij eta_j``, the stage velocities ``y_i = d_l tau_{xi_i}(eta_i)``,
-``Theta_k = h sum_j b_j eta_j``, and
+The seed's Runge-Kutta discrete Lagrangian (003, §5.4) with the s-stage Gauss method (order
+2s): :class:`GaussStages` with two stages (order4), :class:`GaussStages3` with three
+(order6). The NLP variables of interval k are the coordinate rates ``eta_i`` at the stages
+``c_i``; the stage coordinates are ``xi_i = h sum_j a_ij eta_j``, the stage velocities
+``y_i = d_l tau_{xi_i}(eta_i)``, ``Theta_k = h sum_j b_j eta_j``, and
 
     L_d = h sum_i b_i l(q_i, y_i),   Phi_d,i = h b_i psi(q_i, y_i),   q_i = base(step(s_k, xi_i)),
 
-all explicit: the constraints hold at the stages.
+all explicit: the constraints hold at the stages. The method is the collocation method of
+the coordinate equation ``dxi/dt = dtau_xi^-1(y)``, whose solution is smooth in any
+retraction's coordinates, so the step keeps the method's order 2s with every retraction.
 """
 
 from __future__ import annotations
+
+from typing import ClassVar
 
 import casadi as ca
 import numpy as np
@@ -21,10 +25,15 @@ from ..assembly import Block, Kind
 from ..layout import Layout
 from .base import Pick, Readout, Scheme, columns, stage_function
 from .gauss import (
+    BOUND_POINTS,
+    BOUND_POINTS6,
     GAUSS2,
-    GAUSS2_A,
+    GAUSS3,
+    GAUSS3_W,
     bound_times,
-    linear_coefficients,
+    lagrange_integrals,
+    lagrange_values,
+    polynomial_coefficients,
 )
 from .order4 import check_rule, gauss_blocks, local_horizons
 
@@ -40,125 +49,161 @@ class GaussStages(Scheme):
     rescue = "order2"
     summary = ("seed 003 §5.4: Runge-Kutta discrete Lagrangian, 2-stage Gauss, constraints "
                "at the stages")
+    #: the stages (fractions of an interval) and the quadrature weights b_i
+    collocation: ClassVar[np.ndarray] = GAUSS2
+    collocation_weights: ClassVar[np.ndarray] = np.array([0.5, 0.5])
+    #: where the bounds hold (before ``discretization.bound_points``)
+    base_bound_times: ClassVar[np.ndarray] = BOUND_POINTS
 
-    eta: np.ndarray  # (2 dim y) x N: the stage coordinate rates of each interval
+    eta: np.ndarray  # (stages dim y) x N: the stage coordinate rates of each interval
 
     def __init__(self, problem: Problem, N: int, retraction_name: str, rule: str,
                  bound_points: int = 0) -> None:
         super().__init__(problem, N, retraction_name, rule)
         check_rule(problem, rule)
-        self.bound_times = bound_times(bound_points)
+        self.bound_times = bound_times(bound_points, self.base_bound_times)
         G, pb = problem.groupoid, problem
-        ds, dg = G.state_size, G.algebra_dim
-        s, e1, e2, T = ca.SX.sym("s", ds), ca.SX.sym("eta1", dg), ca.SX.sym("eta2", dg), \
-            ca.SX.sym("T")
+        ds, dg, c, b = G.state_size, G.algebra_dim, self.collocation, self.collocation_weights
+        s, T = ca.SX.sym("s", ds), ca.SX.sym("T")
+        eta = [ca.SX.sym(f"eta{i + 1}", dg) for i in range(c.size)]
         h = T / N
-        eta = (e1, e2)
-        xi = [h * (float(GAUSS2_A[i, 0]) * e1 + float(GAUSS2_A[i, 1]) * e2) for i in range(2)]
-        y = [G.velocity_of_rate(self.retractions, xi[i], eta[i]) for i in range(2)]
+
+        def at(tau: float) -> tuple[ca.SX, ca.SX]:
+            """The collocation polynomial at ``t_k + tau h``: its coordinates (the integral
+            of its rate) and its rate (through the stage rates)."""
+            zero = ca.SX.zeros(dg)
+            theta = h * sum((float(w) * e for w, e in zip(lagrange_integrals(c, tau), eta)), zero)
+            rate = sum((float(w) * e for w, e in zip(lagrange_values(c, tau), eta)), zero)
+            return theta, rate
+
+        xi = [at(float(ci))[0] for ci in c]
+        y = [G.velocity_of_rate(self.retractions, xi[i], eta[i]) for i in range(c.size)]
         sub = [self.stages.at([self.stages.running_cost(), self.stages.constraints,
                                self.stages.controls, self.stages.inequalities],
-                              G.step(s, self.retractions, xi[i]), y[i]) for i in range(2)]
-        # elsewhere on the interval, for the bounds: the collocation polynomial, its rate
-        # linear through the stage rates and its coordinates that rate's integral
-        def elsewhere(c: float) -> ca.SX:
-            slope = (e2 - e1) / (GAUSS2[1] - GAUSS2[0])
-            rate = e1 + slope * (c - GAUSS2[0])
-            theta = h * (e1 * c + slope * ((c - GAUSS2[0]) ** 2 - GAUSS2[0] ** 2) / 2)
+                              G.step(s, self.retractions, xi[i]), y[i]) for i in range(c.size)]
+
+        def elsewhere(tau: float) -> ca.SX:
+            """The bounds' expressions between the stages, on the collocation polynomial."""
+            theta, rate = at(tau)
             return self.stages.at([self.stages.inequalities], G.step(s, self.retractions, theta),
                                   G.velocity_of_rate(self.retractions, theta, rate))[0]
 
-        stage_H = {float(GAUSS2[0]): sub[0][3], float(GAUSS2[1]): sub[1][3]}
-        H = ca.vertcat(*[stage_H[float(c)] if float(c) in stage_H else elsewhere(float(c))
-                         for c in self.bound_times])
-        args, names = [s, e1, e2, T, pb.P], ["s", "eta1", "eta2", "T", "P"]
-        #: ``interval(s_k, eta_1, eta_2, T, P) -> (L_d, Phi_d, H)``: Phi_d at both stages, the
-        #: bounds' expressions H at :attr:`bound_times`
+        stage_H = {float(ci): sub[i][3] for i, ci in enumerate(c)}
+        H = ca.vertcat(*[stage_H[float(t)] if float(t) in stage_H else elsewhere(float(t))
+                         for t in self.bound_times])
+        args = [s, *eta, T, pb.P]
+        names = ["s", *(f"eta{i + 1}" for i in range(c.size)), "T", "P"]
+        #: ``interval(s_k, eta_1, ..., eta_s, T, P) -> (L_d, Phi_d, H)``: Phi_d at every
+        #: stage, the bounds' expressions H at :attr:`bound_times`
         self.interval = ca.Function("interval", args, [
-            h / 2 * (sub[0][0] + sub[1][0]), ca.vertcat(h / 2 * sub[0][1], h / 2 * sub[1][1]),
-            H], names, ["L", "Phi", "H"])
-        #: ``stages(...) -> (y_1, y_2, u_1, u_2)``: velocities and controls at the stages
-        self.stage_values = ca.Function("stage_values", args,
-                                        [y[0], y[1], sub[0][2], sub[1][2]], names,
-                                        ["y1", "y2", "u1", "u2"])
+            h * sum(float(w) * sb[0] for w, sb in zip(b, sub)),
+            ca.vertcat(*[h * float(w) * sb[1] for w, sb in zip(b, sub)]), H],
+            names, ["L", "Phi", "H"])
+        #: ``stage_values(...) -> (y_1, ..., y_s, u_1, ..., u_s)``: velocities and controls
+        #: at the stages
+        self.stage_values = ca.Function(
+            "stage_values", args, [*y, *(sb[2] for sb in sub)], names,
+            [*(f"y{i + 1}" for i in range(c.size)), *(f"u{i + 1}" for i in range(c.size))])
 
     @property
     def n_stage(self) -> int:
         G = self.problem.groupoid
-        return self.N * (2 * G.algebra_dim + G.state_size)
+        return self.N * (self.collocation.size * G.algebra_dim + G.state_size)
 
     def index(self, layout: Layout) -> None:
-        """x per interval k: ``eta_1, eta_2, s_{k+1}``."""
+        """x per interval k: ``eta_1, ..., eta_s, s_{k+1}``."""
         G = self.problem.groupoid
-        dg = G.algebra_dim
+        ne = self.collocation.size * G.algebra_dim
         self.layout = layout
-        stage = layout.stage.reshape(self.N, 2 * dg + G.state_size).T
-        self.eta = stage[:2 * dg]
-        self.states = np.hstack([layout.s0[:, None], stage[2 * dg:]])
+        stage = layout.stage.reshape(self.N, ne + G.state_size).T
+        self.eta = stage[:ne]
+        self.states = np.hstack([layout.s0[:, None], stage[ne:]])
         self.end_velocity = layout.VN
+
+    def _stage_rates(self, e: ca.SX) -> list[ca.SX]:
+        """The stacked stage rates of an interval, one by one."""
+        dg = self.problem.groupoid.algebra_dim
+        return [e[i * dg:(i + 1) * dg] for i in range(self.collocation.size)]
 
     def blocks(self) -> list[Block]:
         G, N, lay = self.problem.groupoid, self.N, self.layout
         assert lay is not None
-        ds, dg, npar = G.state_size, G.algebra_dim, self.problem.P.numel()
-        step = self.stages.step
-        recon = stage_function("recon", [ds, 2 * dg, ds, 1], lambda s, e, s1, T: (
-            ca.SX(1, 1), s1 - step(s, T / N * (e[:dg] + e[dg:]) / 2)))
+        ds, npar = G.state_size, self.problem.P.numel()
+        ne = self.collocation.size * G.algebra_dim
+        step, b = self.stages.step, self.collocation_weights
+        recon = stage_function("recon", [ds, ne, ds, 1], lambda s, e, s1, T: (
+            ca.SX(1, 1), s1 - step(s, T / N * sum(float(w) * r for w, r in
+                                                  zip(b, self._stage_rates(e))))))
         comps = [f"{f.state}[{j}]" for f in G.factors for j in range(f.state_size)]
         steps = lay.steps[None, :]
         blocks = [Block("recon", recon, columns(self.states[:, :N], self.eta, self.states[:, 1:],
                                                 steps, ncols=N), 1, Kind.RECONSTRUCTION,
                         rows=[f"reconstruction {c}" for c in comps],
                         columns=[f"interval {k}" for k in range(N)],
-                        next=slice(ds + 2 * dg, 2 * ds + 2 * dg))]
-        return blocks + gauss_blocks(self, [ds, 2 * dg, 1, npar], columns(
+                        next=slice(ds + ne, 2 * ds + ne))]
+        return blocks + gauss_blocks(self, [ds, ne, 1, npar], columns(
             self.states[:, :N], self.eta, steps, lay.P, ncols=N), "stage",
-            split=lambda s, e, T, P: (s, e[:dg], e[dg:], T, P))
+            split=lambda s, e, T, P: (s, *self._stage_rates(e), T, P), at=self.collocation)
 
     def readout_steps(self, pick: Pick) -> ca.MX:
-        """``Theta_k = h (eta_1 + eta_2)/2``."""
+        """``Theta_k = h sum_i b_i eta_i``."""
         assert self.layout is not None
         dg = self.problem.groupoid.algebra_dim
         E = pick(self.eta)
         H = ca.repmat(local_horizons(self, pick) / self.N, dg, 1)
-        return H * (E[:dg, :] + E[dg:, :]) / 2
+        return H * sum(float(w) * E[i * dg:(i + 1) * dg, :]
+                       for i, w in enumerate(self.collocation_weights))
 
     def point(self, XI: ca.MX, pick: Pick) -> list[tuple[np.ndarray, ca.MX]]:
-        """Both stage rates equal to the interval velocity: Theta_k = h xi_k, so the path of
+        """Every stage rate equal to the interval velocity: Theta_k = h xi_k, so the path of
         a guess is the path of the order2 scheme's (a geodesic lands on its target)."""
         lay = self.layout
         assert lay is not None
         H = ca.repmat(local_horizons(self, pick) / self.N, XI.size1(), 1)
         S = self.stages.step.mapaccum(self.N)(pick(lay.s0), H * XI)
-        return [(self.eta, ca.vertcat(XI, XI)), (self.states[:, 1:], S)]
+        return [(self.eta, ca.vertcat(*[XI] * self.collocation.size)), (self.states[:, 1:], S)]
 
     def readout(self, pick: Pick) -> Readout:
-        """Velocities and controls at the stages; the controls between them linear on each
-        interval (the collocation polynomial's rate for R^n factors)."""
-        lay, N = self.layout, self.N
+        """Velocities and controls at the stages; the controls between them the polynomial
+        through the stage values on each interval (a line with two stages; for R^n factors
+        the collocation polynomial's rate)."""
+        lay, N, c = self.layout, self.N, self.collocation
         assert lay is not None
-        dg = self.problem.groupoid.algebra_dim
+        dg, k = self.problem.groupoid.algebra_dim, self.collocation.size
         T, P, E = local_horizons(self, pick), pick(lay.P), pick(self.eta)
         S = ca.horzcat(pick(lay.s0), self.step_over(pick))
-        y1, y2, u1, u2 = self.stage_values.map(N)(S[:, :-1], E[:dg, :], E[dg:, :], T, P)
-        t = ((np.arange(N)[:, None] + GAUSS2[None, :]) / N).ravel()
+        out = self.stage_values.map(N)(S[:, :-1], *[E[i * dg:(i + 1) * dg, :] for i in range(k)],
+                                       T, P)
+        ys, us = list(out[:k]), list(out[k:])
+        t = ((np.arange(N)[:, None] + c[None, :]) / N).ravel()
 
-        def interleave(a: ca.MX, b: ca.MX) -> ca.MX:
-            return ca.reshape(ca.vertcat(a, b), a.size1(), 2 * N)
+        def interleave(parts: list[ca.MX]) -> ca.MX:
+            return ca.reshape(ca.vertcat(*parts), parts[0].size1(), k * N)
 
         m = self.stages.controls.numel()
-        coeff = linear_coefficients(u1, u2, GAUSS2[0], GAUSS2[1], T / N) if m \
-            else ca.MX(0, N)
-        return Readout(self.readout_steps(pick), S, t, interleave(y1, y2), t,
-                       interleave(u1, u2) if m else ca.MX(0, 2 * N), np.arange(N + 1) / N,
-                       coeff)
+        coeff = polynomial_coefficients(ca.vertcat(*us), c, T / N) if m else ca.MX(0, N)
+        return Readout(self.readout_steps(pick), S, t, interleave(ys), t,
+                       interleave(us) if m else ca.MX(0, k * N), np.arange(N + 1) / N, coeff)
 
     @property
     def velocity_groups(self) -> np.ndarray:
-        """Every interval: its two stage rates."""
+        """Every interval: its stage rates."""
         return self.eta.T
 
     def unpack(self, w: np.ndarray) -> dict[str, np.ndarray]:
         lay = self.layout
         assert lay is not None
         return {"eta": w[self.eta].T, "s": w[self.states].T, "T": w[lay.T][0], "P": w[lay.P]}
+
+
+class GaussStages3(GaussStages):
+    """First-order problems: the seed's Runge-Kutta discrete Lagrangian with the three-stage
+    Gauss method (order 6), constraints at the stages (module docstring)."""
+
+    name = "order6"
+    accuracy = 6
+    summary = ("seed 003 §5.4: Runge-Kutta discrete Lagrangian, 3-stage Gauss, constraints "
+               "at the stages")
+    collocation = GAUSS3
+    collocation_weights = GAUSS3_W
+    base_bound_times = BOUND_POINTS6
