@@ -50,8 +50,7 @@ def work_precision_command(
                                           "@BACKEND, +jit, +coarse (solved on N/4 first), "
                                           "e.g. order4@fatrop+jit+coarse (default order2, "
                                           "order4, order6, order2:exp, rk4_quat, "
-                                          "rk4_matrix, rk4_euler; order6 on second-order "
-                                          "problems only)"),
+                                          "rk4_matrix, rk4_euler)"),
     grids: Optional[str] = typer.Option(None, "--N", help="comma-separated N (default "
                                         "8,16,32,64,128)"),
     repeats: int = typer.Option(3, "--repeats", help="timed IPOPT runs per N (at least; "

@@ -49,8 +49,8 @@ def memory_bytes() -> int:
 
 def variables_per_interval(pb: Problem) -> int:
     """An upper bound of the decision variables per interval over every scheme (order6: a node
-    velocity and two bubbles; order4 and order6 draw bounded recovered controls as lines: two
-    values per control and interval, as controls of their own)."""
+    velocity and two bubbles, or three stage rates; order4 and order6 draw bounded recovered
+    controls as lines: two values per control and interval, as controls of their own)."""
     G = pb.groupoid
     return 3 * G.algebra_dim + G.state_size + 2 * max(pb.U.numel(), len(pb.controls))
 
