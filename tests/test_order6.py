@@ -10,12 +10,13 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 import pytest
+from hypothesis import given, settings, strategies as st
 
 import ocgroupoid as og
 from ocgroupoid import files
 from ocgroupoid.nlp.control_lines import ControlLines
 from ocgroupoid.nlp.schemes import GaussStages3
-from ocgroupoid.nlp.schemes.gauss import GAUSS3, SAMPLES6
+from ocgroupoid.nlp.schemes.gauss import GAUSS3, SAMPLES6, hull_matrix
 from ocgroupoid.systems.heavy_top import heavy_top
 from ocgroupoid.systems.rigid_body import rigid_body
 from ocgroupoid.verify.diagnostics import replay_of
@@ -237,3 +238,24 @@ def test_exported_verdict_replays_the_quadratic_velocities() -> None:
         assert miss == pytest.approx(replay["max_terminal_error"], rel=1e-2), (N, miss, replay)
         errors.append(miss)
     assert np.all(orders(errors) >= MIN_ORDER), (errors, orders(errors))
+
+
+@settings(max_examples=50, deadline=None)
+@given(st.lists(st.floats(-10, 10), min_size=3, max_size=3), st.integers(0, 6))
+def test_the_bernstein_hull_bounds_the_quadratic_through_the_stages(coeff: list[float],
+                                                                     elevate: int) -> None:
+    """What first-order order6 bounds (:func:`hull_matrix`): the Bernstein coefficients of
+    the quadratic through the three stage values reproduce it, it lies within their range on
+    the whole interval, and each degree elevation only tightens that range."""
+    from math import comb
+    t = np.linspace(0.0, 1.0, 201)
+    p = coeff[0] + coeff[1] * t + coeff[2] * t ** 2
+    at_stages = coeff[0] + coeff[1] * GAUSS3 + coeff[2] * GAUSS3 ** 2
+    b = hull_matrix(GAUSS3, elevate) @ at_stages
+    n = b.size - 1
+    assert b.size == 3 + elevate
+    curve = sum(b[m] * comb(n, m) * t ** m * (1 - t) ** (n - m) for m in range(n + 1))
+    assert np.allclose(curve, p, atol=1e-9)
+    assert b.min() <= p.min() + 1e-9 and b.max() >= p.max() - 1e-9
+    coarser = hull_matrix(GAUSS3, max(elevate - 1, 0)) @ at_stages
+    assert coarser.min() <= b.min() + 1e-9 and coarser.max() >= b.max() - 1e-9

@@ -193,7 +193,8 @@ class DiscretizationSection(Strict):
     bound_points: int = Field(
         0, ge=0, le=MAX_BOUND_POINTS, description="impose the bounds at this many more "
         "points inside every interval (order4, order6), where a bound is violated between the "
-        "scheme's points")
+        "scheme's points (order6 on first-order problems: elevate the degree of the hull "
+        "the bounds hold on as many times, which tightens it)")
 
 
 class SolverSection(Strict):

@@ -167,7 +167,7 @@ def estimate(tr: Transcription, x: np.ndarray, p: np.ndarray, lam_g: np.ndarray,
     * ``replay_cost``: the reported cost against the one recomputed along the replay.
 
     The plan is a feasible point of the continuous problem up to its miss and violations, so
-    the optimum lies no further below the reported cost than these, to first order: a T
+    the optimum lies no further above the reported cost than these, to first order: a T
     below the true minimum by more than ``T`` is a contradiction the verdict catches."""
     pb, G, lay = tr.problem, tr.problem.groupoid, tr.layout
     ns = G.state_size

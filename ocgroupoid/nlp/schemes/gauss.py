@@ -85,6 +85,29 @@ def polynomial_coefficients(samples: Any, at: np.ndarray, h: Any) -> Any:
     return ca.vertcat(*[alpha[j] / H**j for j in range(k - 1, -1, -1)])
 
 
+def hull_matrix(nodes: np.ndarray, elevate: int = 0) -> np.ndarray:
+    """The Bernstein coefficients, on [0, 1], of the polynomial of degree ``nodes.size - 1``
+    through values at ``nodes``, degree-elevated ``elevate`` times: a matrix of
+    ``nodes.size + elevate`` rows applied to the values. The polynomial lies in the convex
+    hull of its coefficients (Farin, Curves and Surfaces for CAGD, §5.3), so bounds on them
+    bound it on the whole interval; each elevation (ibid. §6.1, ``b'_i = i/(n+1) b_{i-1} +
+    (1 - i/(n+1)) b_i``) tightens the hull towards the polynomial."""
+    from math import comb
+    n = nodes.size - 1
+    basis = np.array([[comb(n, m) * c ** m * (1 - c) ** (n - m) for m in range(n + 1)]
+                      for c in nodes])
+    M = np.linalg.inv(basis)
+    for d in range(n, n + elevate):
+        E = np.zeros((d + 2, d + 1))
+        for i in range(d + 2):
+            if i > 0:
+                E[i, i - 1] = i / (d + 1)
+            if i <= d:
+                E[i, i] = 1 - i / (d + 1)
+        M = E @ M
+    return M
+
+
 def bound_times(extra: int, points: np.ndarray = BOUND_POINTS) -> np.ndarray:
     """Where the bounds hold on an interval (fractions): a scheme's ``points``
     (:data:`BOUND_POINTS`) and ``extra`` more, uniformly spaced inside

@@ -101,10 +101,12 @@ def local_horizons(scheme: Scheme, pick: Pick) -> ca.MX:
 
 
 def gauss_blocks(scheme: QuadraticGauss | GaussStages, sizes: list[int], idx: np.ndarray,
-                 point: str, split: Any = None, at: np.ndarray = GAUSS2) -> list[Block]:
+                 point: str, split: Any = None, at: np.ndarray = GAUSS2,
+                 where: list[str] | None = None) -> list[Block]:
     """The path block (cost and Phi_d at the Gauss points ``at`` of every interval) and, with
     bounds, the inequality block of an order4 or order6 scheme whose ``interval`` Function
-    returns ``(L, Phi, H)``; ``split`` maps the stage inputs to the Function's arguments."""
+    returns ``(L, Phi, H)``; ``split`` maps the stage inputs to the Function's arguments,
+    ``where`` names the bound rows of an interval (default: by their times)."""
     N, pb = scheme.N, scheme.problem
     npar = pb.P.numel()
     names = scheme.stages.constraint_names
@@ -119,7 +121,7 @@ def gauss_blocks(scheme: QuadraticGauss | GaussStages, sizes: list[int], idx: np
         bt = scheme.bound_times
         named = {0.0: "start", 1.0: "end",
                  **{float(c): f"{point} {j + 1}" for j, c in enumerate(at)}}
-        where = [named.get(float(c), f"at {c:.3g} of the interval") for c in bt]
+        where = where or [named.get(float(c), f"at {c:.3g} of the interval") for c in bt]
         blocks.append(Block("interval_bounds", stage_function(
             "interval_bounds", sizes, lambda *z: (ca.SX(1, 1), call(*z)[2])), idx, 1 + npar,
             Kind.INEQUALITY, [f"{n} ({w})" for w in where
