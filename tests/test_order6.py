@@ -220,10 +220,10 @@ def rolled_by_its_velocities() -> og.Problem:
 def test_exported_verdict_replays_the_quadratic_velocities() -> None:
     """A plan driven by its velocities: the replay follows the quadratic through each
     interval's three stage velocities, in Python and in the verdict's graph (what exported C
-    checks), and lands at order 6 (measured 5.70, 5.93). The graph's replay (64 RK4 substeps)
-    and Python's agree to 1 % (measured 0.4 % at N = 16: Python stops doubling its substeps
-    once its own estimate falls below 1e-3 of the miss, and the graph's 64 substeps agree
-    with 256 to 1e-11)."""
+    checks), and lands at order 6 (measured 5.70, 5.93). The graph's replay (64 RK4 substeps,
+    which agree with 256 to 1e-11) and Python's agree to 1e-3 of the miss, the accuracy
+    Python's replay claims: it used to extrapolate against an already extrapolated result and
+    reported misses up to 0.4 % off (0.15 % here at N = 8, 0.4 % on plate_ball at N = 16)."""
     errors = []
     for N in (8, 16, 32):
         solver = og.compile_problem(rolled_by_its_velocities(), N=N, scheme="order6")
@@ -235,7 +235,7 @@ def test_exported_verdict_replays_the_quadratic_velocities() -> None:
         verify = verify_function(tr, replay_of(tr), 64, 1e-6, REPLAY_TOLERANCE)
         _, figures = verify(sol.x, sol.p, sol.lam_g)
         miss = float(figures[FIGURES.index("max_terminal_error")])
-        assert miss == pytest.approx(replay["max_terminal_error"], rel=1e-2), (N, miss, replay)
+        assert miss == pytest.approx(replay["max_terminal_error"], rel=1e-3), (N, miss, replay)
         errors.append(miss)
     assert np.all(orders(errors) >= MIN_ORDER), (errors, orders(errors))
 
