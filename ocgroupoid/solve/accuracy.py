@@ -22,10 +22,9 @@ and meets the targets:
 The estimate checked is the finer grid's, so the grid chosen is at most twice the smallest
 grid of the sequence that meets the target (in the asymptotic regime). ``scheme="auto"``
 searches with each of :data:`AUTO_SCHEMES` and keeps whichever meets the targets with less
-IPOPT time (a later search stops once it has spent more). The
-Solution reports the search in ``diagnostics["accuracy"]`` (every grid: cost, estimate,
-replay error, time) and its own error in ``diagnostics["error_estimate"]``
-(:attr:`Solution.error_estimate`).
+IPOPT time (a later search stops once it has spent more). The Solution reports the search in
+``diagnostics["accuracy"]`` (every grid: cost, estimate, replay error, time) and its own
+error in ``diagnostics["error_estimate"]`` (:attr:`Solution.error_estimate`).
 """
 
 from __future__ import annotations
