@@ -58,15 +58,17 @@ def test_replay_of_accelerations_lands_on_target(sols) -> None:
     assert np.all(np.log2(np.array(errs[:-1]) / np.array(errs[1:])) >= 1.8)
 
 
-def rolling_problem(**final: object) -> og.Problem:
-    """A kinematic first-order problem on R^2 x SO(3): roll, w = (-v_y, v_x, 0)."""
+def rolling_problem(controls: bool = True, **final: object) -> og.Problem:
+    """A kinematic first-order problem on R^2 x SO(3): roll, w = (-v_y, v_x, 0); without
+    ``controls`` it reports none, and its replay is driven by its velocities."""
     G = og.Groupoid(og.Pair(2, "xy", "v"), og.LieGroupFactor(state="R", velocity="w",
                                                              side="left"))
     pb = og.Problem(G, name="roll", order=1)
     v, w = pb.velocity("v"), pb.velocity("w")
     pb.minimize(0.5 * ca.sumsqr(v))
     pb.subject_to(w - ca.vertcat(-v[1], v[0], 0), name="roll")
-    pb.report_controls(v, ["vx", "vy"])
+    if controls:
+        pb.report_controls(v, ["vx", "vy"])
     pb.initial(xy=[0, 0], R=np.eye(3))
     pb.final(**final)
     pb.horizon(1.0)

@@ -7,7 +7,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import casadi as ca
 import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
@@ -23,7 +22,7 @@ from ocgroupoid.verify.diagnostics import replay_of
 from ocgroupoid.verify.graph import FIGURES, verify_function
 from ocgroupoid.verify.verdict import REPLAY_TOLERANCE
 
-from .test_api_general import cubic, minimum_acceleration
+from .test_api_general import cubic, minimum_acceleration, rolling_problem
 from .test_order4 import (
     assert_clean,
     cost_orders,
@@ -205,16 +204,7 @@ def rolled_by_its_velocities() -> og.Problem:
     """A first-order problem whose plan the replay drives by its velocities (no controls:
     the five velocities, three of them fixed by the rolling constraint): roll a ball on
     the plane back to its start, turned by 1 rad about the vertical."""
-    G = og.Groupoid(og.Pair(2, "xy", "v"), og.LieGroupFactor(state="R", velocity="w",
-                                                             side="left"))
-    pb = og.Problem(G, name="roll in place", order=1)
-    v, w = pb.velocity("v"), pb.velocity("w")
-    pb.minimize(0.5 * ca.sumsqr(v))
-    pb.subject_to(w - ca.vertcat(-v[1], v[0], 0), name="roll")
-    pb.initial(xy=[0, 0], R=np.eye(3))
-    pb.final(xy=[0, 0], R=og.so3.from_rotvec([0, 0, 1.0]))
-    pb.horizon(1.0)
-    return pb
+    return rolling_problem(controls=False, xy=[0, 0], R=og.so3.from_rotvec([0, 0, 1.0]))
 
 
 def test_exported_verdict_replays_the_quadratic_velocities() -> None:
