@@ -5,6 +5,7 @@ the controls through its samples, lines)."""
 
 from __future__ import annotations
 
+from math import comb
 from typing import Any
 
 import casadi as ca
@@ -92,7 +93,6 @@ def hull_matrix(nodes: np.ndarray, elevate: int = 0) -> np.ndarray:
     hull of its coefficients (Farin, Curves and Surfaces for CAGD, §5.3), so bounds on them
     bound it on the whole interval; each elevation (ibid. §6.1, ``b'_i = i/(n+1) b_{i-1} +
     (1 - i/(n+1)) b_i``) tightens the hull towards the polynomial."""
-    from math import comb
     n = nodes.size - 1
     basis = np.array([[comb(n, m) * c ** m * (1 - c) ** (n - m) for m in range(n + 1)]
                       for c in nodes])
