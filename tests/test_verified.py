@@ -204,6 +204,20 @@ def test_dubins_order6_keeps_its_turn_rate_within_the_bound_everywhere(word: str
     assert word_of(six) == word
 
 
+@pytest.mark.parametrize("word", sorted(dubins.CASES))
+def test_dubins_order6_adaptive_steps_are_exact(word: str) -> None:
+    """order6's phases hold every Bernstein coefficient of an arc at the bound, so the turn
+    rate is the bound on the whole arc: every word's length exact at N = 16 (measured within
+    5e-14; holding the first coefficient alone left the quadratic free to leave the bound,
+    and the phased plan landed worse than the uniform one)."""
+    goal, exact = dubins.CASES[word]
+    sol = og.solve(dubins_problem(goal), N=16, scheme="order6", retraction="exp",
+                   steps="adaptive", multistart=True)
+    assert sol.success, sol.hint
+    assert sol.discretization["steps"] == "adaptive"
+    assert abs(sol.T - exact) <= 1e-9, (sol.T, exact)
+
+
 def test_a_dubins_car_without_order_1_is_refused_at_check(tmp_path) -> None:
     text = (ROOT / "problems" / "dubins_car.yaml").read_text().replace("  order: 1\n", "")
     path = tmp_path / "second_order.yaml"
