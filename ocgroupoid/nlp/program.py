@@ -39,7 +39,6 @@ from .layout import Layout, Masks
 from .method import Discretization, Method
 from .parameters import ParameterValues
 from .schemes import make_scheme
-from .schemes.gauss import GAUSS2
 from .shared import shared_blocks
 
 #: outputs of the read-out Function, in the order exported C reads them (enum ocg_output)
@@ -153,20 +152,7 @@ class NonlinearProgram:
         the rows a phase holds at one side turned into equalities there
         (:attr:`Discretization.active`)."""
         per_phase = np.repeat(np.arange(len(self.disc.phases)), self.disc.phases)
-        # held at the first Gauss point of each interval (at its first point where the bounds
-        # hold at its ends only), bounded at the others: one equality per interval (more
-        # would over-determine the interval's unknowns where a problem has conditions that
-        # its conservation laws already imply); the optimum holds the rest. A scheme whose
-        # bounds hold on a hull (first-order order6) holds all its coefficients: held alone,
-        # the first let the quadratic leave the bound inside the arc (the Dubins car's LSL at
-        # N = 32 landed 250 times worse phased than uniform; held together, every word's
-        # length is exact to 1e-13)
-        times = np.asarray(getattr(self.scheme, "bound_times", np.zeros(b.points)))
-        gauss = np.isclose(times, getattr(self.scheme, "collocation", GAUSS2)[0])
-        if not gauss.any():
-            gauss = np.arange(times.size) == 0
-        if getattr(self.scheme, "hull", False):  # every Bernstein coefficient: one alone at
-            gauss = np.ones(times.size, dtype=bool)  # the bound lets the quadratic leave it
+        gauss = self.scheme.held_rows(b.points)
         lo_cols, hi_cols = [], []
         for c in range(b.ncols):
             side = np.concatenate([np.asarray(self.disc.active[per_phase[c]]) * int(g)

@@ -112,6 +112,19 @@ class Scheme(ABC):
         self.stages = self.make_stages()
         self.layout: Layout | None = None
 
+    def held_rows(self, points: int) -> np.ndarray:
+        """Which of an interval's ``points`` bound rows a phase of adaptive steps holds at its
+        side in a bang-bang arc (a boolean mask): the row at the first Gauss point (at the
+        first point where the scheme has none, or bounds only at its ends), the others
+        bounded. One equality per interval: more would over-determine the interval's unknowns
+        where a problem has conditions that its conservation laws already imply; the optimum
+        holds the rest."""
+        times = np.asarray(getattr(self, "bound_times", np.zeros(points)))
+        collocation = getattr(self, "collocation", None)
+        gauss = np.isclose(times, collocation[0]) if collocation is not None \
+            else np.zeros(points, dtype=bool)
+        return gauss if gauss.any() else np.arange(points) == 0
+
     def make_stages(self) -> Stages:
         """The stage Functions of this scheme's problem and retractions (a scheme may draw
         some of them otherwise: ``order4``'s lines, :mod:`~ocgroupoid.nlp.control_lines`)."""

@@ -102,12 +102,12 @@ class GaussStages(Scheme):
             return self.stages.at([self.stages.inequalities], G.step(s, self.retractions, theta),
                                   G.velocity_of_rate(self.retractions, theta, rate))[0]
 
-        stage_H = {float(ci): sub[i][3] for i, ci in enumerate(c)}
         if self.hull:
             M = hull_matrix(c, bound_points)
             H = ca.vertcat(*[sum((float(M[r, i]) * sub[i][3] for i in range(c.size)),
                                  ca.SX.zeros(sub[0][3].shape)) for r in range(M.shape[0])])
         else:
+            stage_H = {float(ci): sub[i][3] for i, ci in enumerate(c)}
             H = ca.vertcat(*[stage_H[float(t)] if float(t) in stage_H else elsewhere(float(t))
                              for t in self.bound_times])
         args = [s, *eta, T, pb.P]
@@ -123,6 +123,13 @@ class GaussStages(Scheme):
         self.stage_values = ca.Function(
             "stage_values", args, [*y, *(sb[2] for sb in sub)], names,
             [*(f"y{i + 1}" for i in range(c.size)), *(f"u{i + 1}" for i in range(c.size))])
+
+    def held_rows(self, points: int) -> np.ndarray:
+        """With :attr:`hull`, every Bernstein coefficient: the first alone at the bound let
+        the quadratic leave it inside the arc (the Dubins car's LSL at N = 32 landed 250
+        times worse phased than uniform; held together, every word's length is exact to
+        1e-13). Else the rule of :meth:`Scheme.held_rows`."""
+        return np.ones(points, dtype=bool) if self.hull else super().held_rows(points)
 
     @property
     def n_stage(self) -> int:
