@@ -158,9 +158,10 @@ class Scheme(ABC):
         (or interval): the discrete Euler-Lagrange equations there."""
         raise NotImplementedError
 
-    def euler_lagrange_residual(self, lagrangian: ca.Function, reconstruct: ca.Function,
-                                x: np.ndarray, p: np.ndarray, lam: np.ndarray) -> np.ndarray:
-        """Residuals of the discrete Euler-Lagrange equations (one row per node).
+    def euler_lagrange(self, lagrangian: ca.Function, reconstruct: ca.Function
+                       ) -> Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]:
+        """The residuals of the discrete Euler-Lagrange equations (one row per node), as a
+        map ``(x, p, lam) -> residuals`` built once and evaluated at each solution.
 
         ``lagrangian(x, p, lam)`` is the action sum plus the constraints times their
         multipliers (the reconstruction's set to zero), ``reconstruct(x, p)`` the point
@@ -169,11 +170,17 @@ class Scheme(ABC):
         :attr:`velocity_groups`: zero exactly where the discrete trajectory extremises it
         (seed 000, eq. 18, for the reduced variables).
         """
-        xs = ca.MX.sym("x", x.size)
-        val = lagrangian(reconstruct(xs, p), p, lam)
-        grad = np.array(ca.Function("reduced", [xs], [ca.gradient(val, xs)])(x)).ravel()
-        g = np.concatenate([grad, np.zeros(p.size)])
-        return g[self.velocity_groups]
+        xs, ps, ls = (ca.MX.sym(n, k) for n, k in (("x", lagrangian.size1_in(0)),
+                                                    ("p", lagrangian.size1_in(1)),
+                                                    ("lam", lagrangian.size1_in(2))))
+        gradient = ca.Function("reduced", [xs, ps, ls],
+                               [ca.gradient(lagrangian(reconstruct(xs, ps), ps, ls), xs)])
+        groups = self.velocity_groups
+
+        def residual(x: np.ndarray, p: np.ndarray, lam: np.ndarray) -> np.ndarray:
+            g = np.concatenate([np.array(gradient(x, p, lam)).ravel(), np.zeros(p.size)])
+            return g[groups]
+        return residual
 
     def final_state(self) -> tuple[np.ndarray, ca.Function]:
         """The w-indices the final conditions read, and the map from them to the stored

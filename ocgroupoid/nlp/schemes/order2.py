@@ -22,7 +22,7 @@ the midpoint ``q_{k+1/2} = base(step(s_k, tau(h xi_k/2)))`` and ``phi_d = h psi(
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Callable
 
 import casadi as ca
 import numpy as np
@@ -126,18 +126,19 @@ class IntervalVelocities(Scheme):
         return {"xi": w[self.xi].T, "s": w[self.states].T, "V0": w[lay.V0], "VN": w[lay.VN],
                 "T": w[lay.T][0], "P": w[lay.P]}
 
-    def euler_lagrange_residual(self, lagrangian: ca.Function, reconstruct: ca.Function,
-                                x: np.ndarray, p: np.ndarray, lam: np.ndarray) -> np.ndarray:
+    def euler_lagrange(self, lagrangian: ca.Function, reconstruct: ca.Function
+                       ) -> Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]:
         """Eq. 13/18 at the interior nodes j = 1..N-1: the derivative of the action sum plus
         multiplier terms along the admissible variation ``w_{j-1} -> w_{j-1} exp(t eta)``,
         ``w_j -> exp(-t eta) w_j`` (seed 000, eq. 11), which moves s_j and leaves every
         other state (and so the reconstruction) unchanged. The gradient comes from CasADi's
         AD of ``lagrangian``, the variation from the retractions' ``dtau_inv`` formulas
-        (:meth:`Factor.dxi`)."""
-        xs = ca.MX.sym("x", x.size)
-        grad = np.concatenate([np.array(ca.Function("grad", [xs], [ca.gradient(
-            lagrangian(xs, p, lam), xs)])(x)).ravel(), np.zeros(p.size)])
-        w = np.concatenate([x, p])
+        (:meth:`Factor.dxi`); both are built once, the map ``(x, p, lam) -> residuals``
+        evaluates them."""
+        xs, ps, ls = (ca.MX.sym(n, k) for n, k in (("x", lagrangian.size1_in(0)),
+                                                    ("p", lagrangian.size1_in(1)),
+                                                    ("lam", lagrangian.size1_in(2))))
+        gradient = ca.Function("grad", [xs, ps, ls], [ca.gradient(lagrangian(xs, ps, ls), xs)])
         G, N = self.problem.groupoid, self.N
         dg, ds = G.algebra_dim, G.state_size
         xp, xn, s, T = ca.SX.sym("xp", dg), ca.SX.sym("xn", dg), ca.SX.sym("s", ds), \
@@ -153,15 +154,20 @@ class IntervalVelocities(Scheme):
                 Dp[vs, vs.start + a] = dprev
                 Dn[vs, vs.start + a] = dnext
                 Ds[ss, vs.start + a] = f.variation(s[ss], eta)
-        var = ca.Function("variation", [xp, xn, s, T], [Dp, Dn, Ds])
-        d = self.unpack(w)
-        mats = var.map(N - 1)(d["xi"][:-1].T, d["xi"][1:].T, d["s"][1:N].T, d["T"])
-        # mapped outputs are [D_1 | D_2 | ...]; as (rows, dim y, node) arrays:
-        Dps, Dns, Dss = (np.array(M).reshape(M.shape[0], dg, N - 1, order="F") for M in mats)
-        g_prev, g_next = grad[self.xi[:, :-1]], grad[self.xi[:, 1:]]
-        g_s = grad[self.states[:, 1:N]]
-        return (np.einsum("abj,aj->jb", Dps, g_prev) + np.einsum("abj,aj->jb", Dns, g_next)
-                + np.einsum("abj,aj->jb", Dss, g_s))
+        variation = ca.Function("variation", [xp, xn, s, T], [Dp, Dn, Ds]).map(N - 1)
+
+        def residual(x: np.ndarray, p: np.ndarray, lam: np.ndarray) -> np.ndarray:
+            grad = np.concatenate([np.array(gradient(x, p, lam)).ravel(), np.zeros(p.size)])
+            d = self.unpack(np.concatenate([x, p]))
+            mats = variation(d["xi"][:-1].T, d["xi"][1:].T, d["s"][1:N].T, d["T"])
+            # mapped outputs are [D_1 | D_2 | ...]; as (rows, dim y, node) arrays:
+            Dps, Dns, Dss = (np.array(M).reshape(M.shape[0], dg, N - 1, order="F")
+                             for M in mats)
+            g_prev, g_next = grad[self.xi[:, :-1]], grad[self.xi[:, 1:]]
+            g_s = grad[self.states[:, 1:N]]
+            return (np.einsum("abj,aj->jb", Dps, g_prev) + np.einsum("abj,aj->jb", Dns, g_next)
+                    + np.einsum("abj,aj->jb", Dss, g_s))
+        return residual
 
 
 class NodeMidpoint(IntervalVelocities):
