@@ -43,6 +43,13 @@ DEFAULT_IPOPT: dict[str, Any] = {
     # the same iterations and costs. MUMPS asks for more when it needs it and IPOPT grows
     # the workspace then (no file did, even at 20 %)
     "mumps_mem_percent": 100,
+    # second-order corrections of a rejected trial step: 10, not IPOPT's 4. From the
+    # cart-pole's first guess order6's filter rejected 10 steps in a row (5 halvings each,
+    # 28-37 iterations); with more corrections its fourth step is accepted whole: 30, 28,
+    # 29 -> 19, 20, 25 iterations at N = 16, 32, 64, the same minima (2026-12-02). No other
+    # problem file changes (order4 and order6, N = 16, 64, 256, from the first guess; the
+    # cart-pole's four starts at N = 64; rk4_quat on the cart-pole)
+    "max_soc": 10,
     "print_level": 0,
     "sb": "yes",
 }
