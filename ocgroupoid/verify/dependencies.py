@@ -37,9 +37,25 @@ PROBES = 8  # inverse-iteration vectors: more than the dependencies a problem ma
 _jac_p: WeakKeyDictionary[Transcription, ca.Function] = WeakKeyDictionary()
 
 
-def _csc(M: ca.DM) -> sp.csc_matrix:
-    colind, row = M.sparsity().get_ccs()
-    return sp.csc_matrix((np.array(M.nonzeros()), row, colind), shape=M.shape)
+def _saddle(J: ca.DM, rows: np.ndarray) -> tuple[sp.csc_matrix, sp.csr_matrix, np.ndarray]:
+    """The saddle-point matrix ``K`` of the rows ``rows`` of ``J`` scaled to unit length, that
+    scaled block, and the rows' norms. Assembled from the coordinates of J's nonzeros at once:
+    through scipy's block and diagonal builders it took 3 ms at so3's N = 8 (35 x 101)."""
+    colind, rowind = J.sparsity().get_ccs()
+    col = np.repeat(np.arange(J.shape[1]), np.diff(colind))
+    row, data = np.asarray(rowind), np.array(J.nonzeros())
+    index = np.full(J.shape[0], -1)
+    index[rows] = np.arange(rows.size)
+    keep = index[row] >= 0
+    r, c, v = index[row[keep]], col[keep], data[keep]
+    m, n = rows.size, J.shape[1]
+    norms = np.sqrt(np.bincount(r, v * v, minlength=m))
+    v = v / np.where(norms > 0, norms, 1.0)[r]
+    K = sp.csc_matrix((np.concatenate([np.full(n, GAMMA), v, v, np.full(m, -DELTA)]),
+                       (np.concatenate([np.arange(n), c, n + r, n + np.arange(m)]),
+                        np.concatenate([np.arange(n), n + r, c, n + np.arange(m)]))),
+                      shape=(n + m, n + m))
+    return K, sp.csr_matrix((v, (r, c)), shape=(m, n)), norms
 
 
 def _jacobian_p(tr: Transcription) -> ca.Function:
@@ -76,11 +92,8 @@ def dependencies(tr: Transcription, x: np.ndarray, p: np.ndarray) -> list[np.nda
     eq = np.flatnonzero(lbg == ubg)
     if eq.size == 0:
         return []
-    J = _csc(ca.DM(tr.solver.get_function("nlp_jac_g")(x, p)[1])).tocsr()[eq]
-    norms = np.sqrt(np.asarray(J.multiply(J).sum(axis=1)).ravel())
-    J = sp.diags(1.0 / np.where(norms > 0, norms, 1.0)) @ J
+    K, J, norms = _saddle(ca.DM(tr.solver.get_function("nlp_jac_g")(x, p)[1]), eq)
     m, n = J.shape
-    K = sp.bmat([[GAMMA * sp.identity(n), J.T], [J, -DELTA * sp.identity(m)]]).tocsc()
     lu = spl.splu(K)
     Z = np.random.default_rng(0).standard_normal((n + m, min(PROBES, m)))
     for _ in range(2):
