@@ -41,7 +41,9 @@ DEFAULT_IPOPT: dict[str, Any] = {
     # quadrotor 486 -> 410 ms, quadrotor_min_time 1462 -> 1273 ms, the reaction wheels 628 ->
     # 529 ms; rk4_quat+jit on the quadrotor 279 -> 224 ms); smaller KKT systems unchanged,
     # the same iterations and costs. MUMPS asks for more when it needs it and IPOPT grows
-    # the workspace then (no file did, even at 20 %)
+    # the workspace then (no file did with order4 or rk4_quat, even at 20 %; the Dubins car
+    # with order6 at N = 256 does, at 1000 % too: its pivots are delayed, see
+    # docs/benchmarks/performance.md on mumps_permuting_scaling)
     "mumps_mem_percent": 100,
     # second-order corrections of a rejected trial step: 10, not IPOPT's 4. From the
     # cart-pole's first guess order6's filter rejected 10 steps in a row (5 halvings each,
