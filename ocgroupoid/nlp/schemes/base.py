@@ -170,9 +170,7 @@ class Scheme(ABC):
         :attr:`velocity_groups`: zero exactly where the discrete trajectory extremises it
         (seed 000, eq. 18, for the reduced variables).
         """
-        xs, ps, ls = (ca.MX.sym(n, k) for n, k in (("x", lagrangian.size1_in(0)),
-                                                    ("p", lagrangian.size1_in(1)),
-                                                    ("lam", lagrangian.size1_in(2))))
+        xs, ps, ls = lagrangian.mx_in()
         gradient = ca.Function("reduced", [xs, ps, ls],
                                [ca.gradient(lagrangian(reconstruct(xs, ps), ps, ls), xs)])
         groups = self.velocity_groups

@@ -135,9 +135,7 @@ class IntervalVelocities(Scheme):
         AD of ``lagrangian``, the variation from the retractions' ``dtau_inv`` formulas
         (:meth:`Factor.dxi`); both are built once, the map ``(x, p, lam) -> residuals``
         evaluates them."""
-        xs, ps, ls = (ca.MX.sym(n, k) for n, k in (("x", lagrangian.size1_in(0)),
-                                                    ("p", lagrangian.size1_in(1)),
-                                                    ("lam", lagrangian.size1_in(2))))
+        xs, ps, ls = lagrangian.mx_in()
         gradient = ca.Function("grad", [xs, ps, ls], [ca.gradient(lagrangian(xs, ps, ls), xs)])
         G, N = self.problem.groupoid, self.N
         dg, ds = G.algebra_dim, G.state_size
