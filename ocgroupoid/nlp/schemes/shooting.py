@@ -20,7 +20,7 @@ order, Euler angles fail at a pitch of 90 degrees.
 
 from __future__ import annotations
 
-from typing import Any, Callable, ClassVar
+from typing import Any, ClassVar
 
 import casadi as ca
 import numpy as np
@@ -281,14 +281,6 @@ class RK4Shooting(Scheme):
                 found.append((f, z[start:start + c.size]))
             start += c.size
         return found
-
-    def euler_lagrange(self, lagrangian: ca.Function, reconstruct: ca.Function
-                       ) -> Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]:
-        """No residuals: shooting has no discrete Euler-Lagrange equations (it is not
-        variational)."""
-        dg = self.problem.groupoid.algebra_dim
-        return lambda x, p, lam: np.zeros((0, dg))
-
 
 class RK4Quaternion(RK4Shooting):
     name = "rk4_quat"
