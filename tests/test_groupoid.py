@@ -130,6 +130,21 @@ def test_rplus_inverts_rminus(f, seed: int) -> None:
 
 
 @every_factor
+@given(seed=seeds, angle=st.sampled_from([0.0, 1e-9, 1.0, np.pi - 1e-6, np.pi - 1e-12, np.pi]))
+def test_terminal_error_is_the_formula_on_numbers(f, seed: int, angle: float) -> None:
+    """The compiled rminus of terminal_error (one Function call) gives what the formula
+    evaluated on numbers gives, at random pairs and at a half-turn and near it."""
+    rng = np.random.default_rng(seed)
+    a = f.sample_state(rng)
+    v = rng.standard_normal(f.algebra_dim)
+    b = np.asarray(f.rplus(a, angle * v / np.linalg.norm(v)), dtype=float).ravel()
+    mask = np.ones(f.state_dim, bool)
+    for s, goal in ((b, a), (a, b), (f.sample_state(rng), a)):
+        formula = float(np.linalg.norm(np.asarray(f.rminus(s, goal), dtype=float).ravel()))
+        assert f.terminal_error(s, goal, mask) == pytest.approx(formula, rel=1e-12, abs=1e-12)
+
+
+@every_factor
 @given(seed=seeds)
 def test_chart_has_no_root_but_the_target(f, seed: int) -> None:
     """The chart vanishes at the target and grows with the distance from it: |chart| is at

@@ -66,7 +66,7 @@ def verify_function(tr: Transcription, replay: Replay, substeps: int, check_tol:
     z0 = ca.vertcat(states[:, 0], velocities[:, 0] if second else ca.MX(0, 1), 0)
     h = breaks[:, 1:] - breaks[:, :-1]
     Ps = ca.repmat(P, 1, n)
-    coarse = replay._pieces(k, m, substeps // 2, n)(z0, coeff, h, Ps)[0][:, -1]
+    coarse = replay._path(k, m, substeps // 2, n)(z0, coeff, h, Ps)[:, -1]
     zs, H, psi = replay._pieces(k, m, substeps, n)(z0, coeff, h, Ps)
     z = zs[:, -1]
     ns = G.state_size
