@@ -129,6 +129,19 @@ def test_rplus_inverts_rminus(f, seed: int) -> None:
     assert d_ab == pytest.approx(f.terminal_error(b, a, np.ones(f.state_dim, bool)), abs=1e-9)
 
 
+@every_group_factor
+@given(seed=seeds)
+def test_distances_of_states_are_each_state_s(f, seed: int) -> None:
+    """The distances from the group of many node states (drifted off it), measured in one
+    mapped call and one stack, are those of each state alone."""
+    rng = np.random.default_rng(seed)
+    states = np.array([f.sample_state(rng) for _ in range(6)])
+    states += 1e-4 * np.arange(6)[:, None] * rng.standard_normal(states.shape)
+    each = [f.distance(s) for s in states]
+    assert np.allclose(f.distances(states), each, rtol=1e-13, atol=1e-16)
+    assert each[0] <= 1e-12
+
+
 @every_factor
 @given(seed=seeds, angle=st.sampled_from([0.0, 1e-9, 1.0, np.pi - 1e-6, np.pi - 1e-12, np.pi]))
 def test_terminal_error_is_the_formula_on_numbers(f, seed: int, angle: float) -> None:

@@ -80,6 +80,19 @@ def test_tau_tau_inv_bijective(case: Case, data: st.DataObject) -> None:
                        rtol=0)
 
 
+@every_group
+@given(seed=st.integers(0, 2**32 - 1))
+def test_distance_from_group_of_a_stack_is_each_matrix_s(G, seed: int) -> None:
+    """A stack of matrices, some pushed off the group, measured at once as one by one."""
+    rng = np.random.default_rng(seed)
+    Ms = [np.asarray(G.matrix(G.sample(rng)), dtype=float) for _ in range(5)]
+    Ms = [M + (1e-3 * i) * rng.standard_normal(M.shape) for i, M in enumerate(Ms)]
+    each = [float(G.distance_from_group(M)) for M in Ms]
+    stacked = np.asarray(G.distance_from_group(np.stack(Ms)), dtype=float)
+    assert stacked.shape == (5,) and np.allclose(stacked, each, rtol=1e-14, atol=0)
+    assert each[0] <= 1e-12 and (isinstance(G, Rn) or all(e > 0 for e in each[1:]))
+
+
 @every_retraction
 @given(data=st.data())
 def test_tau_lands_in_group(case: Case, data: st.DataObject) -> None:

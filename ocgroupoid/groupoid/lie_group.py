@@ -124,15 +124,16 @@ class LieGroupFactor(Factor):
         return np.array(self._matrix(np.asarray(s, dtype=float)))
 
     def distance(self, s: np.ndarray) -> float:
-        return self.group.distance_from_group(self.matrix(s))
+        return float(self.group.distance_from_group(self.matrix(s)))
 
     def distances(self, states: np.ndarray) -> np.ndarray:
-        """:meth:`distance` of every row, the matrices evaluated in one mapped call."""
+        """:meth:`distance` of every row, the matrices evaluated in one mapped call and
+        measured as one stack."""
         n = len(states)
         M = np.array(self._matrix.map(n)(np.asarray(states, dtype=float).T))
         r, c = self.group.matrix_shape
-        return np.array([self.group.distance_from_group(M[:, i * c:(i + 1) * c])
-                         for i in range(n)])
+        return np.asarray(self.group.distance_from_group(M.reshape(r, n, c).swapaxes(0, 1)),
+                          dtype=float).reshape(n)
 
     @property
     def matrix_shape(self) -> tuple[int, ...]:

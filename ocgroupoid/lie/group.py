@@ -168,8 +168,9 @@ class LieGroup(ABC):
         """A random element (uniform rotations; standard normal positions and vectors)."""
 
     @abstractmethod
-    def distance_from_group(self, M: Any) -> float:
-        """How far a numeric matrix is from the group (0 for an exact element)."""
+    def distance_from_group(self, M: Any) -> Any:
+        """How far a numeric matrix is from the group (0 for an exact element): a float, or
+        for a stack of matrices ``(..., rows, columns)`` an array of their distances."""
 
     # -- deduced operations (written once) ---------------------------------------------
 

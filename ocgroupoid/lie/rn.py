@@ -123,8 +123,8 @@ class Rn(LieGroup):
     def sample(self, rng: np.random.Generator) -> np.ndarray:
         return rng.normal(size=self.dim)
 
-    def distance_from_group(self, M: Any) -> float:
-        return 0.0
+    def distance_from_group(self, M: Any) -> Any:
+        return np.zeros(np.shape(M)[:-2]) if np.ndim(M) > 2 else 0.0
 
     def __eq__(self, other: object) -> bool:
         return isinstance(other, Rn) and other.dim == self.dim

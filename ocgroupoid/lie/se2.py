@@ -281,11 +281,13 @@ class SE2Group(LieGroup):
         half = float(rng.uniform(-np.pi, np.pi)) / 2
         return np.array([np.cos(half), np.sin(half), *rng.normal(size=2)])
 
-    def distance_from_group(self, M: Any) -> float:
-        """``|R^T R - I| + |last row - (0, 0, 1)|``."""
+    def distance_from_group(self, M: Any) -> Any:
+        """``|R^T R - I| + |last row - (0, 0, 1)|`` (of each matrix of a stack)."""
         g = np.asarray(to_numpy(M), dtype=float)
-        R = g[0:2, 0:2]
-        return float(np.linalg.norm(R.T @ R - np.eye(2)) + np.linalg.norm(g[2] - [0.0, 0.0, 1.0]))
+        R = g[..., 0:2, 0:2]
+        d = (np.linalg.norm(np.swapaxes(R, -1, -2) @ R - np.eye(2), axis=(-2, -1))
+             + np.linalg.norm(g[..., 2, :] - [0.0, 0.0, 1.0], axis=-1))
+        return float(d) if d.ndim == 0 else d
 
 
 SE2 = SE2Group()

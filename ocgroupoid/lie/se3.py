@@ -235,11 +235,11 @@ class SE3Group(LieGroup):
         """A Haar-uniform rotation and a standard normal position."""
         return np.concatenate([SO3.sample(rng), rng.normal(size=3)])
 
-    def distance_from_group(self, M: Any) -> float:
-        """``|R^T R - I| + |last row - (0, 0, 0, 1)|``."""
+    def distance_from_group(self, M: Any) -> Any:
+        """``|R^T R - I| + |last row - (0, 0, 0, 1)|`` (of each matrix of a stack)."""
         g = np.asarray(to_numpy(M), dtype=float)
-        return SO3.distance_from_group(g[:3, :3]) + float(
-            np.linalg.norm(g[3] - [0.0, 0.0, 0.0, 1.0]))
+        return SO3.distance_from_group(g[..., :3, :3]) + np.linalg.norm(
+            g[..., 3, :] - [0.0, 0.0, 0.0, 1.0], axis=-1)
 
 
 SE3 = SE3Group()

@@ -219,10 +219,11 @@ class SO3Group(LieGroup):
         """Haar-uniform: a normalised Gaussian quaternion."""
         return np.asarray(self.normalise(rng.normal(size=4)))
 
-    def distance_from_group(self, M: Any) -> float:
-        """``|R^T R - I|``."""
+    def distance_from_group(self, M: Any) -> Any:
+        """``|R^T R - I|`` (of each matrix of a stack)."""
         R = np.asarray(to_numpy(M), dtype=float)
-        return float(np.linalg.norm(R.T @ R - np.eye(3)))
+        d = np.linalg.norm(np.swapaxes(R, -1, -2) @ R - np.eye(3), axis=(-2, -1))
+        return float(d) if d.ndim == 0 else d
 
 
 SO3 = SO3Group()
