@@ -86,16 +86,17 @@ class SaddleSolve:
     difference of near-equal terms. Without dense columns, the LU of K itself."""
 
     def __init__(self, K: sp.csc_matrix, dense: np.ndarray) -> None:
+        self.D = np.asarray(dense)
+        if not self.D.size:
+            self.lu = spl.splu(K)
+            return
         keep = np.ones(K.shape[0], dtype=bool)
         keep[dense] = False
-        self.R, self.D = np.flatnonzero(keep), np.asarray(dense)
-        K_R = K[:, self.R]
-        self.lu = spl.splu(K_R[self.R, :].tocsc())
-        if self.D.size:
-            self.K_RD = K[:, self.D][self.R, :].toarray()
-            self.W = self.lu.solve(self.K_RD)
-            K_DD = K[:, self.D][self.D, :].toarray()
-            self.S = K_DD - self.K_RD.T @ self.W
+        self.R = np.flatnonzero(keep)
+        self.lu = spl.splu(K[:, self.R][self.R, :].tocsc())
+        self.K_RD = K[:, self.D][self.R, :].toarray()
+        self.W = self.lu.solve(self.K_RD)
+        self.S = K[:, self.D][self.D, :].toarray() - self.K_RD.T @ self.W
 
     def solve(self, B: np.ndarray) -> np.ndarray:
         """Z with ``K Z = B`` (B: a matrix of right-hand sides)."""
@@ -150,9 +151,10 @@ def dependencies(tr: Transcription, x: np.ndarray, p: np.ndarray) -> list[np.nda
         Z = solver.solve(Z)
         Z /= np.linalg.norm(Z, axis=0)
     Y = np.linalg.qr(Z[n:])[0]
+    residuals = np.linalg.norm(J.T @ Y, axis=0)  # |J^T y| of every column y of Y
     found = []
-    for y in Y.T:
-        if np.linalg.norm(J.T @ y) <= RANK_TOL:
+    for y, residual in zip(Y.T, residuals):
+        if residual <= RANK_TOL:
             full = np.zeros(len(lbg))
             full[eq] = y / np.where(norms > 0, norms, 1.0)
             found.append(full)
