@@ -212,6 +212,17 @@ def test_the_helper_answers_and_is_stopped_every_way() -> None:
         isolated.Isolated(_fail).call(None, 30)
 
 
+def test_the_helper_is_stopped_at_its_deadline_not_a_poll_later() -> None:
+    """A deadline shorter than the poll interval is kept to within a few milliseconds (the
+    caller is woken at the deadline itself), and an answer that comes in time is taken."""
+    helper = isolated.Isolated(_sleep)
+    assert helper.call(0.0, 10) == 0.0  # the helper forked and warm
+    t0 = time.perf_counter()
+    assert helper.call(1.0, isolated.POLL / 10) == isolated.Stopped("time")
+    assert time.perf_counter() - t0 < isolated.POLL / 10 + 0.02
+    assert helper.call(0.001, isolated.POLL / 2) == 0.001
+
+
 # -- the time a solve takes, up front (item 8) -------------------------------------------------
 
 def test_a_long_solve_is_announced_with_its_estimate(monkeypatch) -> None:

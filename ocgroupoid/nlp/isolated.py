@@ -217,8 +217,9 @@ class Isolated:
             return self._ended()
         answer, need = bytearray(), _HEADER.size
         header_done = False
-        while True:
-            ready, _, _ = select.select([answers_r, errors_r], [], [], POLL)
+        while True:  # woken at the deadline itself, not up to POLL after it
+            wait = min(POLL, max(0.0, deadline - time.monotonic()))
+            ready, _, _ = select.select([answers_r, errors_r], [], [], wait)
             if errors_r in ready:
                 self._relay(errors_r)
             if answers_r in ready:
@@ -236,8 +237,10 @@ class Isolated:
                     if kind == "error":
                         raise RuntimeError(value)
                     return value
+            if answer:  # the work is done and its answer on the way
+                continue
             reason = "nan" if self.nans >= NAN_LIMIT else "time" if \
-                time.monotonic() > deadline else "stop" if stop() else None
+                time.monotonic() >= deadline else "stop" if stop() else None
             if reason is not None:
                 self.close()
                 return Stopped(reason)
