@@ -130,8 +130,9 @@ class Replay:
         two successive results agree (their difference, /15, estimates the error of the
         finer one, which is then Richardson-extrapolated) to 1e-3 of the terminal error or
         :data:`ABS_TOL`: the replay's own error is never what it reports. The doublings
-        integrate only (:meth:`_path`); the bounds and constraints, if any, are sampled
-        once, along the last M (:meth:`_pieces`)."""
+        integrate only (:meth:`_path`) below :data:`DENSE` substeps; the bounds and
+        constraints, if any, are sampled once along the last M (:meth:`_pieces`), on the
+        same substeps from DENSE on, where the doublings take them along."""
         if self.rhs is None:
             return {"available": False, "reason": self.reason}
         tr = self.tr
@@ -147,11 +148,22 @@ class Replay:
         z0 = np.concatenate([z0, [0.0]])  # the running cost, integrated alongside
         coeffs = C.transpose(0, 2, 1).reshape(k * m, n)  # column j: piece j, m fastest
         args = (z0, coeffs, np.diff(breaks)[None, :], np.repeat(P[:, None], n, axis=1))
+        assert self.along is not None  # set with rhs
+        sampled = bool(self.along.numel_out(1) or self.along.numel_out(2))  # bounds, psi
+
+        def integrate(M: int) -> tuple[np.ndarray, list[np.ndarray] | None]:
+            """The state after every piece with M substeps, and the samples (H, psi) where
+            they ride along on the same substeps (M >= DENSE; else None)."""
+            if sampled and M >= DENSE:
+                zs, *samples = (np.asarray(v) for v in self._pieces(k, m, M, n)(*args))
+                return zs[:, -1], samples
+            return np.asarray(self._path(k, m, M, n)(*args))[:, -1], None
+
         M = SUBSTEPS[0]
-        previous = np.asarray(self._path(k, m, M, n)(*args))[:, -1]
+        previous, _ = integrate(M)
         while True:
             M *= 2
-            raw = np.asarray(self._path(k, m, M, n)(*args))[:, -1]
+            raw, samples = integrate(M)
             # Richardson pairs two plain RK4 results, never an extrapolated one
             estimate = float(np.max(np.abs(raw[:-1] - previous[:-1]))) / 15.0
             z = raw + (raw - previous) / 15.0
@@ -163,9 +175,10 @@ class Replay:
                 break
             previous = raw
         H = psi = np.zeros((0, 0))
-        assert self.along is not None  # set with rhs
-        if self.along.numel_out(1) or self.along.numel_out(2):  # bounds or constraints
+        if sampled and samples is None:  # the last M below DENSE: sampled apart
             _, H, psi = (np.asarray(v) for v in self._pieces(k, m, M, n)(*args))
+        elif samples is not None:
+            H, psi = samples
         report = {"available": True, "input": self.input, "terminal_error": errors,
                   "max_terminal_error": worst, "integration_error": estimate, "substeps": M,
                   "final_state": z[:-1].tolist(), "running_cost": float(z[-1])}
