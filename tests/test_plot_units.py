@@ -150,6 +150,27 @@ def test_bounds_are_drawn_where_the_problem_has_them(name: str,
         assert any(t.startswith("bounds") for t in legend), legend
 
 
+def test_bound_labels_follow_each_solve_s_parameters_and_are_its_own() -> None:
+    """The labels of a compiled problem's solutions (kept between solves with the same
+    parameters) give the sides at each solve's parameter values, and one solution's labels
+    changed leave the next solution's alone."""
+    cfg = files.load(Path(__file__).resolve().parents[1] / "problems" / "reaction_wheels.yaml",
+                     ["horizon.N=8"])
+    d = cfg.file.discretization
+    compiled = og.compile_problem(files.build(cfg), cfg.file.horizon.N, d.retraction, d.rule,
+                                  cfg.file.solver.ipopt, d.scheme, d.steps)
+
+    def torque_sides(sol: og.Solution) -> set[tuple[float, float]]:
+        return {(b["lower"], b["upper"]) for b in sol.labels["bounds"] if b["name"] == "u"}
+
+    first = compiled.solve(multistart=False, replay=False)
+    assert torque_sides(first) == {(-0.1, 0.1)}
+    first.labels["bounds"].clear()
+    assert torque_sides(compiled.solve(multistart=False, replay=False)) == {(-0.1, 0.1)}
+    wider = compiled.solve(params={"tau_max": 0.12}, multistart=False, replay=False)
+    assert torque_sides(wider) == {(-0.12, 0.12)}
+
+
 def test_a_bound_far_from_the_values_is_drawn_off_scale_and_said(figures: dict[str, Any]
                                                                  ) -> None:
     ax = {a.get_gid(): a for a in figures["ten_controls"].axes}
