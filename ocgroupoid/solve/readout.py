@@ -20,7 +20,7 @@ import numpy as np
 from ..nlp.assembly import Kind
 from ..nlp.transcription import RawResult, Transcription
 from ..verify.diagnostics import diagnose
-from ..verify.verdict import REPLAY_TOLERANCE, check_tolerance, tolerances, verdict
+from ..verify.verdict import REPLAY_TOLERANCE, check_tolerance, scales, tolerances, verdict
 from .hints import hint_for
 from .solution import Solution
 
@@ -54,11 +54,12 @@ def make_solution(tr: Transcription, r: RawResult, minima: Sequence[Any],
     diagnostics = diagnose(tr, r.x, r.p, r.lam_g, out, ppoly, replay=replay, solved=r.success)
     diagnostics["reconstruction_residual_nlp"] = recon_nlp
     diagnostics["runs"] = runs(r)
-    failures = verdict(tr, r, out, diagnostics, ipopt, replay_tolerance)
+    scale = scales(tr, out, r.p)  # the distances covered, for the verdict and its record
+    failures = verdict(tr, r, out, diagnostics, ipopt, replay_tolerance, scale)
     diagnostics["verdict"] = {"verified": r.success and not failures, "failures": failures,
                               "check_tolerance": check_tolerance(ipopt),
                               "replay_tolerance": replay_tolerance,
-                              "tolerances": tolerances(tr, out, r.p, replay_tolerance)}
+                              "tolerances": tolerances(tr, out, r.p, replay_tolerance, scale)}
     diagnostics["seconds"] = time.perf_counter() - t0
     hint = "; ".join(failures) if failures else hint_for(tr, r, out["steps"])
     T = tr.horizon(r.x, r.p)

@@ -35,6 +35,7 @@ estimate of the cost's (and a free T's) error (``diagnostics["estimate"]``).
 from __future__ import annotations
 
 from typing import Any
+from weakref import WeakKeyDictionary
 
 import casadi as ca
 import numpy as np
@@ -83,9 +84,11 @@ def suggested_N(N: int, ratio: float, order: int) -> int:
 
 def verdict(tr: Transcription, r: RawResult, out: dict[str, np.ndarray],
             d: dict[str, Any], ipopt: dict[str, Any] | None,
-            replay_tolerance: float = REPLAY_TOLERANCE) -> list[str]:
+            replay_tolerance: float = REPLAY_TOLERANCE,
+            scale: dict[str, float] | None = None) -> list[str]:
     """Why the solution ``r`` (read out as ``out``, diagnosed as ``d``) is not a verified
-    success: one sentence per failed check; [] when it is one (module docstring)."""
+    success: one sentence per failed check; [] when it is one (module docstring).
+    ``scale``: :func:`scales` of ``out``, if the caller has it."""
     if not r.success:
         return []  # IPOPT failed: its hint says why
     failures = []
@@ -112,26 +115,27 @@ def verdict(tr: Transcription, r: RawResult, out: dict[str, np.ndarray],
         failures.append(f"not verifiable: {rep.get('reason', 'no replay')} — nothing drives "
                         "this plan through the continuous problem, so nothing confirms it")
     else:
-        failures += _landing(tr, out, r.p, rep, replay_tolerance, order)
-        failures += _along(tr, out, r.p, rep, replay_tolerance, order)
+        scale = scales(tr, out, r.p) if scale is None else scale
+        failures += _landing(tr, rep, replay_tolerance, order, scale)
+        failures += _along(tr, rep, replay_tolerance, order,
+                           tolerances(tr, out, r.p, replay_tolerance, scale))
     failures += _rule_range(tr, d, order)
     return failures
 
 
 def tolerances(tr: Transcription, out: dict[str, np.ndarray], p: np.ndarray,
-               replay_tolerance: float) -> dict[str, Any]:
+               replay_tolerance: float, scale: dict[str, float] | None = None
+               ) -> dict[str, Any]:
     """The absolute tolerances of item 4: per prescribed final value (landing), per bound
     (``replay_tolerance`` of its largest finite side, at least of 1) and for the constraints
-    along a velocity-driven replay."""
-    scale = scales(tr, out, p)
+    along a velocity-driven replay. ``scale``: :func:`scales` of ``out``, if the caller has
+    it."""
+    scale = scales(tr, out, p) if scale is None else scale
     landing = {n: float(replay_tolerance * v + FLOOR) for n, v in scale.items()}
     out_b: dict[str, float] = {}
-    pb = tr.problem
-    sides = tr.scheme.stages.inequality_bounds()  # None without inequalities
+    sides = _sides(tr)
     if sides is not None:
-        lo, hi = (np.array(v).ravel() for v in
-                  ca.Function("sides", [pb.P], list(sides))(
-                      tr.part(p, "P")))
+        lo, hi = (np.array(v).ravel() for v in sides(tr.part(p, "P")))
         for name, a, b in zip(tr.scheme.stages.inequality_names, lo, hi):
             size = max([abs(v) for v in (a, b) if np.isfinite(v)] + [1.0])
             out_b[name] = float(replay_tolerance * size)
@@ -140,10 +144,23 @@ def tolerances(tr: Transcription, out: dict[str, np.ndarray], p: np.ndarray,
             "constraints": float(replay_tolerance * max(1.0, states))}
 
 
-def _landing(tr: Transcription, out: dict[str, np.ndarray], p: np.ndarray,
-             rep: dict[str, Any], replay_tolerance: float, order: int) -> list[str]:
-    """Item 4: the replay reaches every prescribed final value within its tolerance."""
-    scale = scales(tr, out, p)
+_sides_of: WeakKeyDictionary[Transcription, ca.Function | None] = WeakKeyDictionary()
+
+
+def _sides(tr: Transcription) -> ca.Function | None:
+    """``sides(P) -> (lower, upper)`` of every bound row, built once per transcription; None
+    without inequalities."""
+    if tr not in _sides_of:
+        sides = tr.scheme.stages.inequality_bounds()
+        _sides_of[tr] = None if sides is None else \
+            ca.Function("sides", [tr.problem.P], list(sides))
+    return _sides_of[tr]
+
+
+def _landing(tr: Transcription, rep: dict[str, Any], replay_tolerance: float, order: int,
+             scale: dict[str, float]) -> list[str]:
+    """Item 4: the replay reaches every prescribed final value within its tolerance (the
+    distances covered: ``scale``)."""
     worst = max(((e / (replay_tolerance * scale.get(n, 0.0) + FLOOR), n, e)
                  for n, e in rep["terminal_error"].items()), default=(0.0, "", 0.0))
     if worst[0] <= 1.0:
@@ -155,10 +172,10 @@ def _landing(tr: Transcription, out: dict[str, np.ndarray], p: np.ndarray,
              f"increase N to {suggested_N(tr.N, worst[0], order)}")]
 
 
-def _along(tr: Transcription, out: dict[str, np.ndarray], p: np.ndarray,
-           rep: dict[str, Any], replay_tolerance: float, order: int) -> list[str]:
-    """Item 4: the bounds (and a velocity-driven plan's constraints) along the replay."""
-    tol = tolerances(tr, out, p, replay_tolerance)
+def _along(tr: Transcription, rep: dict[str, Any], replay_tolerance: float, order: int,
+           tol: dict[str, Any]) -> list[str]:
+    """Item 4: the bounds (and a velocity-driven plan's constraints) along the replay (their
+    tolerances: ``tol``)."""
     failures = []
     for name, v in rep.get("bound_violation", {}).items():
         limit = tol["bounds"].get(name, replay_tolerance)
