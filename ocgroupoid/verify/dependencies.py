@@ -11,14 +11,15 @@ Each vector ``y`` with ``J^T y = 0`` is a dependency among the rows it touches. 
 of ``J`` scaled to unit length, such ``y`` are found by two steps of inverse iteration with
 the sparse LU of the saddle-point matrix ``K = [[gamma I, J^T], [J, -delta I]]``, whose
 eigenvalues near zero are ``-sigma^2 / gamma - delta`` for the small singular values
-``sigma`` of ``J``: cheap at any N (one sparse LU), and never squaring the conditioning of
-``J`` as ``J J^T`` would. A column of ``J`` with an entry in most rows (a free T, which every
-row of the dynamics holds) is eliminated apart (:class:`SaddleSolve`): left in, it filled the
-LU of the quadrotor's minimum-time slew at N = 256 with 14.6 million nonzeros (0.55 s), where
-the same ``K`` without it takes 0.74 million. A ``y`` with ``|J^T y| <= RANK_TOL`` is a
-dependency. Prescribed values are not rows (they are parameters p), so each dependency is
-named by the parameters it constrains: ``y^T dg/dp != 0`` means moving that value makes the
-conditions inconsistent.
+``sigma`` of ``J``: cheap at any N (one sparse LU, in the band order of the stages:
+:class:`BandedLU`), and never squaring the conditioning of ``J`` as ``J J^T`` would. A
+column of ``J`` with an entry in most rows (a free T, which every row of the dynamics holds)
+is eliminated apart (:class:`SaddleSolve`): left in, it filled the LU of the quadrotor's
+minimum-time slew at N = 256 with 14.6 million nonzeros (0.55 s), where the same ``K``
+without it takes 0.74 million. A ``y`` with ``|J^T y| <= RANK_TOL`` is a dependency.
+Prescribed values are not rows (they are parameters p), so each dependency is named by the
+parameters it constrains: ``y^T dg/dp != 0`` means moving that value makes the conditions
+inconsistent.
 Bounds are left out: active bounds are often dependent (more active points than control
 freedom on a bang arc) and their multipliers keep their sign.
 """

@@ -216,9 +216,7 @@ class Replay:
         key = (k, m, M, n)
         if key not in self._cache:
             substep, sample = self._substep(k, m)
-            nz1 = substep.size1_in(0)
-            z, c, h, P = (ca.MX.sym(n, d) for n, d in (("z", nz1), ("c", k * m), ("h", 1),
-                                                        ("P", substep.size1_in(4))))
+            z, c, h, P = _piece_inputs(substep, k, m)
             S = max(M, DENSE)
             states = {}
             for count in {M, S}:
@@ -242,8 +240,7 @@ class Replay:
         key = (k, m, M, n, "path")
         if key not in self._cache:
             substep, _ = self._substep(k, m)
-            z, c, h, P = (ca.MX.sym(name, size) for name, size in (
-                ("z", substep.size1_in(0)), ("c", k * m), ("h", 1), ("P", substep.size1_in(4))))
+            z, c, h, P = _piece_inputs(substep, k, m)
             dt = h / M
             zz = substep.mapaccum(M)(z, c, dt * ca.DM(np.arange(M)).T, dt, P)[:, -1]
             self._cache[key] = ca.Function("path", [z, c, h, P], [zz]).mapaccum(n)
@@ -275,6 +272,13 @@ class Replay:
         vals = along(z[:nz], u_at(t0), P)
         sample = ca.Function("sample", [z, c, t0, P], [vals[1], ca.fabs(vals[2])])
         return substep, sample
+
+
+def _piece_inputs(substep: ca.Function, k: int, m: int) -> tuple[ca.MX, ...]:
+    """The symbols of one piece: the state with its running cost, the input's k m
+    coefficients, the piece's length and the parameters."""
+    return tuple(ca.MX.sym(name, size) for name, size in (
+        ("z", substep.size1_in(0)), ("c", k * m), ("h", 1), ("P", substep.size1_in(4))))
 
 
 def extreme(S: np.ndarray) -> np.ndarray:

@@ -35,14 +35,13 @@ estimate of the cost's (and a free T's) error (``diagnostics["estimate"]``).
 from __future__ import annotations
 
 from typing import Any
-from weakref import WeakKeyDictionary
 
-import casadi as ca
 import numpy as np
 
 from ..nlp.backends import DEFAULT_IPOPT
 from ..nlp.transcription import RawResult, Transcription
 from .dependencies import dependent_conditions
+from .diagnostics import replay_of
 from .replay import terminal_errors
 
 REPLAY_TOLERANCE = 0.01  # replay terminal error / distance covered; bound violation / its size
@@ -133,28 +132,15 @@ def tolerances(tr: Transcription, out: dict[str, np.ndarray], p: np.ndarray,
     scale = scales(tr, out, p) if scale is None else scale
     landing = {n: float(replay_tolerance * v + FLOOR) for n, v in scale.items()}
     out_b: dict[str, float] = {}
-    sides = _sides(tr)
-    if sides is not None:
-        lo, hi = (np.array(v).ravel() for v in sides(tr.part(p, "P")))
-        for name, a, b in zip(tr.scheme.stages.inequality_names, lo, hi):
+    rep = replay_of(tr)  # its sides of every bound row, built once
+    if rep.names:
+        lo, hi = (np.array(v).ravel() for v in rep.sides(tr.part(p, "P")))
+        for name, a, b in zip(rep.names, lo, hi):
             size = max([abs(v) for v in (a, b) if np.isfinite(v)] + [1.0])
             out_b[name] = float(replay_tolerance * size)
     states = float(np.max(np.abs(out["node_states"]))) if out["node_states"].size else 1.0
     return {"landing": landing, "bounds": out_b,
             "constraints": float(replay_tolerance * max(1.0, states))}
-
-
-_sides_of: WeakKeyDictionary[Transcription, ca.Function | None] = WeakKeyDictionary()
-
-
-def _sides(tr: Transcription) -> ca.Function | None:
-    """``sides(P) -> (lower, upper)`` of every bound row, built once per transcription; None
-    without inequalities."""
-    if tr not in _sides_of:
-        sides = tr.scheme.stages.inequality_bounds()
-        _sides_of[tr] = None if sides is None else \
-            ca.Function("sides", [tr.problem.P], list(sides))
-    return _sides_of[tr]
 
 
 def _landing(tr: Transcription, rep: dict[str, Any], replay_tolerance: float, order: int,
