@@ -25,18 +25,22 @@ def test_script_runs_quick(script: Path, tmp_path) -> None:
     assert list(tmp_path.glob("*.png")), "no PNG written"
 
 
-@pytest.mark.parametrize("args, says", [
-    (["--set", "solver.ipopt.mumps_mem_percent=abc"], "mumps_mem_percent"),
-    (["--set", "horizon.no_such_key=1"], "no_such_key"),
-    (["--schemes", "order9"], "unknown scheme 'order9'"),
-    (["--N", "64,x"], "--N: '64,x' is not a comma-separated list of integers"),
-    (["--N", "0"], "--N: N must be at least 2"),
+@pytest.mark.parametrize("name, args, says", [
+    ("bench_setting", ["--set", "solver.ipopt.mumps_mem_percent=abc"], "mumps_mem_percent"),
+    ("bench_setting", ["--set", "horizon.no_such_key=1"], "no_such_key"),
+    ("bench_setting", ["--schemes", "order9"], "unknown scheme 'order9'"),
+    ("bench_setting", ["--N", "64,x"], "--N: '64,x' is not a comma-separated list of integers"),
+    ("bench_setting", ["--N", "0"], "--N: N must be at least 2"),
+    ("bench_checks", ["--scheme", "order9"], "unknown scheme 'order9'"),
+    ("bench_checks", ["--scheme", "order4,order6"], "--scheme takes one method"),
+    ("bench_checks", ["--N", "64,x"], "--N: '64,x' is not a comma-separated list of integers"),
+    ("bench_checks", ["--N", "0"], "--N: N must be at least 2"),
 ])
-def test_bench_setting_refuses_bad_input_in_one_line(args: list[str], says: str,
-                                                     tmp_path: Path) -> None:
+def test_bench_scripts_refuse_bad_input_in_one_line(name: str, args: list[str], says: str,
+                                                    tmp_path: Path) -> None:
     """Every input is checked before anything is built: one line naming it, exit 2, no
     traceback and nothing written."""
-    script = next(p for p in SCRIPTS if p.stem == "bench_setting")
+    script = next(p for p in SCRIPTS if p.stem == name)
     r = subprocess.run([sys.executable, str(script), *args, "--out", str(tmp_path)],
                        capture_output=True, text=True, timeout=120)
     assert r.returncode == 2, r.stdout + r.stderr
