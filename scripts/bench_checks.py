@@ -85,7 +85,7 @@ def chart(rows: list[dict[str, Any]], path: Path) -> Path:
     ax.set_ylim(0, 1)
     ax.set_title("A solve through the API: the solver, the checks of the verdict, the rest",
                  fontsize=10)
-    ax.legend(fontsize=8, loc="lower right")
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.005, 1.0))
     return save_png(fig, path, 110)
 
 
