@@ -64,6 +64,21 @@ def test_rank_test_finds_nothing_on_independent_conditions() -> None:
     assert sol.success and dependent_conditions(tr, sol.x, sol.p) == []
 
 
+def test_a_solved_and_checked_transcription_is_freed_with_its_solver() -> None:
+    """What the checks keep per transcription (its replay, residual and sensitivity maps)
+    does not keep it alive: the replay held it, and every compiled problem stayed in memory."""
+    import gc
+    import weakref
+
+    solver = og.compile_problem(rigid_body(), N=16, scheme="order4")
+    sol = solver.solve(multistart=False)
+    assert sol.success and sol.diagnostics["replay"]["available"]
+    ref = weakref.ref(solver.transcription)
+    del solver, sol
+    gc.collect()
+    assert ref() is None
+
+
 def test_underactuated_slew_has_implied_final_components() -> None:
     """Only u3 acts on a rest-to-rest turn about e3: the components about e1, e2 are implied."""
     sol = og.solve(minimum_time(), N=9, multistart=False)

@@ -26,8 +26,6 @@ freedom on a bang arc) and their multipliers keep their sign.
 
 from __future__ import annotations
 
-from weakref import WeakKeyDictionary
-
 import casadi as ca
 import numpy as np
 import scipy.sparse as sp
@@ -35,6 +33,7 @@ import scipy.sparse.linalg as spl
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 from ..nlp.transcription import Transcription
+from .once import per_transcription
 
 RANK_TOL = 1e-9  # |J^T y| of a dependency, rows of J of unit length, |y| = 1
 GAMMA, DELTA = 1e-6, 1e-13  # the saddle-point matrix K
@@ -42,8 +41,6 @@ GAMMA, DELTA = 1e-6, 1e-13  # the saddle-point matrix K
 #: eliminated apart from the sparse LU (:class:`SaddleSolve`)
 DENSE_SHARE, DENSE_LEAST = 0.1, 64
 PROBES = 8  # inverse-iteration vectors: more than the dependencies a problem may hold
-
-_jac_p: WeakKeyDictionary[Transcription, ca.Function] = WeakKeyDictionary()
 
 
 def _saddle(J: ca.DM, rows: np.ndarray) -> tuple[sp.csc_matrix, sp.csr_matrix, np.ndarray]:
@@ -130,12 +127,11 @@ class SaddleSolve:
         return Z
 
 
+@per_transcription
 def _jacobian_p(tr: Transcription) -> ca.Function:
     """``dg/dp (x, p)``: how the constraints move with the parameters, built once."""
-    if tr not in _jac_p:
-        x, p = tr.nlp["x"], tr.nlp["p"]
-        _jac_p[tr] = ca.Function("jac_g_p", [x, p], [ca.jacobian(tr.nlp["g"], p)])
-    return _jac_p[tr]
+    x, p = tr.nlp["x"], tr.nlp["p"]
+    return ca.Function("jac_g_p", [x, p], [ca.jacobian(tr.nlp["g"], p)])
 
 
 def parameter_labels(tr: Transcription) -> list[str]:

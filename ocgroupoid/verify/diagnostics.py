@@ -20,7 +20,6 @@
 from __future__ import annotations
 
 from typing import Any, Callable
-from weakref import WeakKeyDictionary
 
 import casadi as ca
 import numpy as np
@@ -28,21 +27,27 @@ import numpy as np
 from ..nlp import mesh
 from ..nlp.assembly import Kind
 from ..nlp.transcription import RawResult, Transcription
+from .once import per_transcription
 from .replay import Replay, terminal_errors
 
-_replays: WeakKeyDictionary[Transcription, Replay] = WeakKeyDictionary()
 
-
+@per_transcription
 def replay_of(tr: Transcription) -> Replay:
     """The Replay of a transcription, built once (its dynamics and compiled integrators)."""
-    if tr not in _replays:
-        _replays[tr] = Replay(tr)
-    return _replays[tr]
+    return Replay(tr)
 
 
-_euler_lagrange: WeakKeyDictionary[
-    Transcription, Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]] = \
-    WeakKeyDictionary()
+@per_transcription
+def _euler_lagrange(tr: Transcription) -> Callable[[np.ndarray, np.ndarray, np.ndarray],
+                                                   np.ndarray]:
+    """The scheme's residual map (:meth:`Scheme.euler_lagrange`) of the NLP's Lagrangian."""
+    f, g = tr.nlp["f"], tr.nlp["g"]
+    ls = ca.MX.sym("lam", tr.ng)
+    lagrangian = ca.Function("lagrangian", [tr.nlp["x"], tr.nlp["p"], ls], [f + ca.dot(ls, g)])
+    xs, ps = ca.MX.sym("x", tr.nx), ca.MX.sym("p", tr.np)
+    reconstruct = ca.Function("reconstruct", [xs, ps], [tr.readout_function(
+        xs, ps, ca.MX.zeros(tr.ng))[0]])
+    return tr.scheme.euler_lagrange(lagrangian, reconstruct)
 
 
 def euler_lagrange_residual(tr: Transcription, x: np.ndarray, p: np.ndarray,
@@ -52,20 +57,10 @@ def euler_lagrange_residual(tr: Transcription, x: np.ndarray, p: np.ndarray,
     never used (the variations keep the reconstruction satisfied). The scheme's map
     (:meth:`Scheme.euler_lagrange`) is built once per transcription: its symbolic gradient
     took 5 of the 36 ms of a cart-pole solve at N = 16."""
-    if tr not in _euler_lagrange:
-        f, g = tr.nlp["f"], tr.nlp["g"]
-        ls = ca.MX.sym("lam", tr.ng)
-        lagrangian = ca.Function("lagrangian", [tr.nlp["x"], tr.nlp["p"], ls],
-                                 [f + ca.dot(ls, g)])
-        xs, ps = ca.MX.sym("x", tr.nx), ca.MX.sym("p", tr.np)
-        reconstruct = ca.Function("reconstruct", [xs, ps], [tr.readout_function(
-            xs, ps, ca.MX.zeros(tr.ng))[0]])
-        _euler_lagrange[tr] = tr.scheme.euler_lagrange(lagrangian, reconstruct)
     lam = np.asarray(lam_g, dtype=float).copy()
     lam[tr.rows(Kind.RECONSTRUCTION).ravel()] = 0.0
-    return _euler_lagrange[tr](np.asarray(x, dtype=float).ravel(),
-                               np.asarray(p, dtype=float).ravel(),
-                               lam)
+    return _euler_lagrange(tr)(np.asarray(x, dtype=float).ravel(),
+                               np.asarray(p, dtype=float).ravel(), lam)
 
 
 def conserved_values(tr: Transcription, states: np.ndarray, velocities: np.ndarray,
@@ -214,19 +209,19 @@ def estimate(tr: Transcription, x: np.ndarray, p: np.ndarray, lam_g: np.ndarray,
     return out
 
 
-_gradient_p: WeakKeyDictionary[Transcription, ca.Function] = WeakKeyDictionary()
+@per_transcription
+def _gradient_p(tr: Transcription) -> ca.Function:
+    """``(x, p, lam) -> d/dp (f + lam . g)``: built once (the symbolic gradient took 2.4 ms
+    of every so3 solve at N = 256)."""
+    ps, ls = ca.MX.sym("p", tr.np), ca.MX.sym("lam", tr.ng)
+    fx = ca.substitute([tr.nlp["f"] + ca.dot(ls, tr.nlp["g"])], [tr.nlp["p"]], [ps])[0]
+    return ca.Function("dL_dp", [tr.nlp["x"], ps, ls], [ca.gradient(fx, ps)])
 
 
 def _lagrangian_gradient_p(tr: Transcription, x: np.ndarray, p: np.ndarray,
                            lam: np.ndarray) -> np.ndarray:
-    """``d/dp (f + lam . g)`` at (x, p): the sensitivity of the optimal cost to p. Its map
-    is built once per transcription (the symbolic gradient took 2.4 ms of every so3 solve at
-    N = 256)."""
-    if tr not in _gradient_p:
-        ps, ls = ca.MX.sym("p", tr.np), ca.MX.sym("lam", tr.ng)
-        fx = ca.substitute([tr.nlp["f"] + ca.dot(ls, tr.nlp["g"])], [tr.nlp["p"]], [ps])[0]
-        _gradient_p[tr] = ca.Function("dL_dp", [tr.nlp["x"], ps, ls], [ca.gradient(fx, ps)])
-    return np.array(_gradient_p[tr](x, p, lam)).ravel()
+    """``d/dp (f + lam . g)`` at (x, p): the sensitivity of the optimal cost to p."""
+    return np.array(_gradient_p(tr)(x, p, lam)).ravel()
 
 
 def _terminal(tr: Transcription, s: np.ndarray, y: np.ndarray, p: np.ndarray) -> float:

@@ -24,6 +24,7 @@ doubled until its own error is negligible (:meth:`Replay.run`).
 
 from __future__ import annotations
 
+import weakref
 from typing import Any
 
 import casadi as ca
@@ -80,7 +81,9 @@ class Replay:
     """The continuous problem driven by the plan (module docstring)."""
 
     def __init__(self, tr: Transcription) -> None:
-        self.tr = tr
+        #: the transcription, not kept alive by its replay (kept per transcription,
+        #: :func:`~ocgroupoid.verify.diagnostics.replay_of`)
+        self.tr = weakref.proxy(tr)
         pb, G = tr.problem, tr.problem.groupoid
         stages = tr.scheme.stages
         dynamics = Dynamics(pb, stages)
