@@ -11,9 +11,15 @@ import numpy as np
 import pytest
 
 import ocgroupoid as og
+from ocgroupoid import files
+from ocgroupoid.bench.methods import Method
+from ocgroupoid.bench.timing import Setting
 from ocgroupoid.errors import ConfigError
 from ocgroupoid.systems.heavy_top import heavy_top
 from ocgroupoid.systems.rigid_body import rigid_body
+from ocgroupoid.verify.diagnostics import replay_of
+
+PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
 
 needs_cc = pytest.mark.skipif(not any(shutil.which(c) for c in ("cc", "gcc", "clang")),
                               reason="no C compiler on PATH")
@@ -110,3 +116,38 @@ def test_a_warm_start_is_heard_and_stopped_like_a_cold_one() -> None:
     assert r.success and heard == list(range(r.iterations + 1)), (heard, r.iterations)
     stopped = tr.solve(warm, p, lambda i, f, g: i >= 1)
     assert stopped.status == "User_Requested_Stop" and stopped.iterations == 1
+
+
+
+@needs_cc
+@pytest.mark.parametrize("name, N", [("so3_minimum_time", 8), ("dubins_car", 8),
+                                     ("reaction_wheels", 16)])
+def test_the_compiled_replay_reports_what_the_graphs_report(name: str, N: int) -> None:
+    """With jit the replay's RK4 substep and samples of the bounds are machine code: on a
+    solution, its report (terminal errors, the substeps its doublings chose, the running cost,
+    the bounds' worst violations, the constraints along it) is the one CasADi's evaluation of
+    the same graphs gives, to rounding."""
+    cfg = files.load(PROBLEMS / f"{name}.yaml", ["solver.multistart=false"])
+    method = Method(cfg.file.discretization.scheme, jit=True)
+    solver = Setting.of(cfg.file).compile(files.build(cfg), method, N)
+    sol = solver.solve()
+    tr = solver.transcription
+    replay = replay_of(tr)
+    out = tr.readout(sol.x, sol.p, sol.lam_g)
+    assert replay.compiled
+    compiled = replay.run(out, sol.control_ppoly, sol.p)
+    assert [key[-1] for key in replay._kernels] == [True]  # no graph evaluated
+    assert {fn.class_name() for fn in replay._substep(*next(iter(replay._kernels))[:2],
+                                                      compiled=True)} == {"External"}
+    replay.compiled = False
+    graphs = replay.run(out, sol.control_ppoly, sol.p)
+    assert compiled["available"] and compiled["substeps"] == graphs["substeps"]
+    for key in ("max_terminal_error", "running_cost", "integration_error"):
+        assert compiled[key] == pytest.approx(graphs[key], rel=1e-12, abs=1e-15), key
+    np.testing.assert_allclose(compiled["final_state"], graphs["final_state"], rtol=1e-12,
+                               atol=1e-15)
+    for key in ("bound_violation_max", "constraint_residual_max"):
+        assert (key in compiled) == (key in graphs), key
+        if key in compiled:
+            assert compiled[key] == pytest.approx(graphs[key], rel=1e-9, abs=1e-14), key
+    assert "bound_violation_max" in compiled  # every one of the three has bounds

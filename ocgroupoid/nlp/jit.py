@@ -59,22 +59,30 @@ def compiled(*sets: dict[str, ca.Function]) -> tuple[list[dict[str, ca.Function]
     order4, N = 64 compiles in 6.6 s for both, 5.9 s for fatrop's alone and 11 s for the two
     apart. The sets after the first are in the library under numbered names (``s1_nlp_f``) and
     loaded behind a Function of their own name (nlpsol finds its cache by name)."""
+    loaded, built = library([_renamed(functions[name], _symbol(i, name))
+                             for i, functions in enumerate(sets) for name in NLP_FUNCTIONS])
+    n = len(NLP_FUNCTIONS)
+    return [{name: _renamed(fn, name) for name, fn in zip(NLP_FUNCTIONS, loaded[i * n:])}
+            for i in range(len(sets))], built
+
+
+def library(functions: list[ca.Function]) -> tuple[list[ca.Function], bool]:
+    """``functions`` (of distinct names) as machine code: generated into one C source,
+    compiled into a shared library in :func:`cache_dir` unless one of the same source and
+    flags is there (its file name is their hash), and loaded; and whether it was compiled
+    now."""
     gen = ca.CodeGenerator("ocg_jit.c", {"with_header": False})
-    for i, functions in enumerate(sets):
-        for name in NLP_FUNCTIONS:
-            gen.add(_renamed(functions[name], _symbol(i, name)))
+    for fn in functions:
+        gen.add(fn)
     with tempfile.TemporaryDirectory(prefix="ocg-jit-") as tmp:
         gen.generate(tmp + os.sep)
         source = Path(tmp, "ocg_jit.c").read_bytes()
         digest = hashlib.sha256(source + " ".join(CFLAGS).encode()).hexdigest()[:24]
-        folder = cache_dir()
-        library = folder / f"ocg_jit_{digest}.so"
-        built = not library.exists()
+        path = cache_dir() / f"ocg_jit_{digest}.so"
+        built = not path.exists()
         if built:
-            _build(Path(tmp, "ocg_jit.c"), library)
-    loaded = [{name: _renamed(ca.external(_symbol(i, name), str(library)), name)
-               for name in NLP_FUNCTIONS} for i in range(len(sets))]
-    return loaded, built
+            _build(Path(tmp, "ocg_jit.c"), path)
+    return [ca.external(fn.name(), str(path)) for fn in functions], built
 
 
 def _symbol(i: int, name: str) -> str:

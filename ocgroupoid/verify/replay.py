@@ -19,7 +19,10 @@ samples). Along the replay, on a dense grid (at least :data:`DENSE` samples per 
 bounds are evaluated (the largest violation of each is the one a Solution reports), the
 constraints (last case) too, and the running cost is integrated (the cost recomputed from the
 plan). The integrator is RK4 compiled by CasADi and mapped over the pieces, its substeps
-doubled until its own error is negligible (:meth:`Replay.run`).
+doubled until its own error is negligible (:meth:`Replay.run`). With the transcription's
+``jit`` its RK4 substep and its sample of the bounds are machine code as the NLP's Functions
+are (:func:`~ocgroupoid.nlp.jit.library`; the graphs of the exported verdict keep CasADi's
+own).
 """
 
 from __future__ import annotations
@@ -31,6 +34,7 @@ import casadi as ca
 import numpy as np
 
 from ..nlp.dynamics import Dynamics, rk4
+from ..nlp.jit import library
 from ..nlp.transcription import Transcription
 
 #: RK4 substeps per piece: the first pair compared, and the most ever taken
@@ -122,7 +126,10 @@ class Replay:
         self.sides = ca.Function("sides", [pb.P], list(bounds) if bounds else
                                  [ca.SX(0, 1), ca.SX(0, 1)])
         self.names = stages.inequality_names
-        self._cache: dict[tuple[int | str, ...], ca.Function] = {}
+        #: whether :meth:`run` evaluates compiled substeps and samples (the transcription's jit)
+        self.compiled = bool(tr.jit)
+        self._cache: dict[tuple[int | str | bool, ...], ca.Function] = {}
+        self._kernels: dict[tuple[int, int, bool], tuple[ca.Function, ca.Function]] = {}
 
     def run(self, out: dict[str, np.ndarray], ppoly: dict[str, np.ndarray], p: np.ndarray
             ) -> dict[str, Any]:
@@ -158,9 +165,10 @@ class Replay:
             """The state after every piece with M substeps, and the samples (H, psi) where
             they ride along on the same substeps (M >= DENSE; else None)."""
             if sampled and M >= DENSE:
-                zs, *samples = (np.asarray(v) for v in self._pieces(k, m, M, n)(*args))
+                zs, *samples = (np.asarray(v) for v in
+                                self._pieces(k, m, M, n, self.compiled)(*args))
                 return zs[:, -1], samples
-            return np.asarray(self._path(k, m, M, n)(*args))[:, -1], None
+            return np.asarray(self._path(k, m, M, n, self.compiled)(*args))[:, -1], None
 
         M = SUBSTEPS[0]
         previous, _ = integrate(M)
@@ -179,7 +187,7 @@ class Replay:
             previous = raw
         H = psi = np.zeros((0, 0))
         if sampled and samples is None:  # the last M below DENSE: sampled apart
-            _, H, psi = (np.asarray(v) for v in self._pieces(k, m, M, n)(*args))
+            _, H, psi = (np.asarray(v) for v in self._pieces(k, m, M, n, self.compiled)(*args))
         elif samples is not None:
             H, psi = samples
         report = {"available": True, "input": self.input, "terminal_error": errors,
@@ -209,16 +217,17 @@ class Replay:
         return {"bound_violation": per, "bound_violation_max": float(np.max(worst)),
                 "bound_samples": DENSE}
 
-    def _pieces(self, k: int, m: int, M: int, n: int) -> ca.Function:
+    def _pieces(self, k: int, m: int, M: int, n: int, compiled: bool = False) -> ca.Function:
         """``(z0, coefficients (k m x n), steps (1 x n), P) -> (z, H, psi)``: z after every
         piece (M RK4 substeps, the input evaluated by Horner's rule in t - t_j, the running
         cost as the last state), the bound expressions at max(M, DENSE) + 1 samples of every
         piece (their columns, piece after piece) and per piece the largest |psi| there.
         The substeps and samples are loops (``mapaccum``, ``map``) over one RK4 substep and
-        one sample, not unrolled: the exported verdict's code does not grow with M."""
-        key = (k, m, M, n)
+        one sample, not unrolled: the exported verdict's code does not grow with M. With
+        ``compiled`` the loops call the compiled substep and sample (:meth:`_substep`)."""
+        key = (k, m, M, n, compiled)
         if key not in self._cache:
-            substep, sample = self._substep(k, m)
+            substep, sample = self._substep(k, m, compiled)
             z, c, h, P = _piece_inputs(substep, k, m)
             S = max(M, DENSE)
             states = {}
@@ -235,24 +244,36 @@ class Replay:
             self._cache[key] = piece.mapaccum(n)
         return self._cache[key]
 
-    def _path(self, k: int, m: int, M: int, n: int) -> ca.Function:
+    def _path(self, k: int, m: int, M: int, n: int, compiled: bool = False) -> ca.Function:
         """``(z0, coefficients, steps, P) -> z``: z after every piece, as :meth:`_pieces`
         integrates it (the same M RK4 substeps), without the samples of the bounds: the
         doublings of :meth:`run` need only the end (on the quadrotor at N = 256 the samples
         were two thirds of a doubling's time)."""
-        key = (k, m, M, n, "path")
+        key = (k, m, M, n, compiled, "path")
         if key not in self._cache:
-            substep, _ = self._substep(k, m)
+            substep, _ = self._substep(k, m, compiled)
             z, c, h, P = _piece_inputs(substep, k, m)
             dt = h / M
             zz = substep.mapaccum(M)(z, c, dt * ca.DM(np.arange(M)).T, dt, P)[:, -1]
             self._cache[key] = ca.Function("path", [z, c, h, P], [zz]).mapaccum(n)
         return self._cache[key]
 
-    def _substep(self, k: int, m: int) -> tuple[ca.Function, ca.Function]:
+    def _substep(self, k: int, m: int, compiled: bool = False
+                 ) -> tuple[ca.Function, ca.Function]:
         """``substep(z, c, t0, dt, P)``: one RK4 step from t0 over dt of the state with its
         running cost; ``sample(z, c, t, P) -> (H, |psi|)``: the bounds and constraints at a
-        state and time; the input a polynomial in t with coefficients c (highest first)."""
+        state and time; the input a polynomial in t with coefficients c (highest first).
+        ``compiled``: both as machine code, built once (module docstring)."""
+        key = (k, m, compiled)
+        if key not in self._kernels:
+            substep, sample = self._symbolic_substep(k, m)
+            if compiled:
+                substep, sample = library([substep, sample])[0]
+            self._kernels[key] = substep, sample
+        return self._kernels[key]
+
+    def _symbolic_substep(self, k: int, m: int) -> tuple[ca.Function, ca.Function]:
+        """The SX graphs of :meth:`_substep`."""
         rhs, along = self.rhs, self.along
         assert rhs is not None and along is not None
         nz = rhs.size1_in(0)
