@@ -11,7 +11,8 @@ boundary values, T) are inputs and never enter the hash.
 
 Measured on so3 at N = 256 (order2): evaluations 11.4 ms -> 1.2 ms per solve, a solve
 26 ms -> 15 ms, against 0.8 s to generate and compile (``scripts/bench_backends.py`` states
-the break-even in solves for every problem file).
+the break-even in solves for every problem file). :func:`library` compiles any Functions the
+same way: the replay's RK4 substep (:mod:`~ocgroupoid.verify.replay`) is one.
 """
 
 from __future__ import annotations
