@@ -214,3 +214,30 @@ def test_an_unreachable_target_is_named_not_blamed_on_the_start(tmp_path: Path) 
     assert "final.v is implied by" in sol.hint and "final.p" in sol.hint
     assert "an unactuated direction" in sol.hint
     assert "violated most at the last iterate: final.p" in sol.hint
+
+
+def test_the_checks_read_the_rows_at_a_solution_once() -> None:
+    """The checks evaluate the NLP's rows g at the solution once: the bound report and the
+    active sides of every bound take them from there (they evaluated g twice more, 1.2 ms a
+    call on the quadrotor at N = 256), and report what they report from g of their own."""
+    from ocgroupoid.verify.diagnostics import bound_report, diagnose
+    cfg = files.load(PROBLEMS / "so3_minimum_time.yaml",
+                     ["horizon.N=8", "solver.multistart=false"])
+    d = cfg.file.discretization
+    solver = og.compile_problem(files.build(cfg), 8, d.retraction, d.rule, cfg.file.solver.ipopt,
+                                d.scheme, d.steps)
+    sol = solver.solve()
+    tr = solver.transcription
+    out = tr.readout(sol.x, sol.p, sol.lam_g)
+    x = out["x_solution"]
+    alone = bound_report(tr, x, sol.p)
+    assert alone["bounds_active"] and alone == bound_report(tr, x, sol.p,
+                                                             np.array(tr.g_fun(x, sol.p)).ravel())
+    calls, g_fun = [], tr.g_fun
+    tr.g_fun = lambda *args: calls.append(args) or g_fun(*args)
+    try:
+        report = diagnose(tr, x, sol.p, sol.lam_g, out, sol.control_ppoly, replay=False)
+    finally:
+        tr.g_fun = g_fun
+    assert len(calls) == 1
+    assert {k: report[k] for k in alone} == alone

@@ -19,21 +19,32 @@ from ..nlp.transcription import RawResult, Transcription
 ACTIVE = 1e-6  # a bound within ACTIVE * max(1, |bound|) counts as active
 
 
-def active_sides(tr: Transcription, r: RawResult) -> tuple[np.ndarray, np.ndarray]:
+def active_sides(tr: Transcription, r: RawResult,
+                 rows_at: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+                 ) -> tuple[np.ndarray, np.ndarray]:
     """Times of the bounds' points (sorted) and, per bound row and time, +1 (at the upper
-    bound), -1 (at the lower) or 0 (free)."""
+    bound), -1 (at the lower) or 0 (free). ``rows_at``: the rows ``(g, lbg, ubg)`` at r where
+    the caller has them already (else evaluated here)."""
     rows = tr.rows(Kind.INEQUALITY)
     if not rows.size:
         return np.zeros(0), np.zeros((0, 0))
     frac = np.concatenate([b.times for b in tr.blocks if b.kind is Kind.INEQUALITY])
     order = np.argsort(frac, kind="stable")
     times = clock(tr, r, frac[order])
-    g = np.array(tr.g_fun(r.x, r.p)).ravel()[rows][:, order]
-    lbg, ubg, _, _ = (np.array(v).ravel() for v in tr.bounds_function(r.p))
+    g_all, lbg, ubg = rows_at if rows_at is not None else rows_of(tr, r.x, r.p)
+    g = g_all[rows][:, order]
     lo, hi = lbg[rows][:, order], ubg[rows][:, order]
     tol = ACTIVE * np.maximum(1.0, np.abs(np.where(np.isfinite(hi), hi, lo)))
     side = np.where(g >= hi - tol, 1, np.where(g <= lo + tol, -1, 0))
     return times, side
+
+
+def rows_of(tr: Transcription, x: np.ndarray, p: np.ndarray, g: np.ndarray | None = None
+            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The NLP's rows ``g`` at (x, p) (evaluated unless given) and their bounds ``lbg``,
+    ``ubg``, flat."""
+    lbg, ubg, _, _ = (np.array(v).ravel() for v in tr.bounds_function(p))
+    return np.array(tr.g_fun(x, p)).ravel() if g is None else g, lbg, ubg
 
 
 def clock(tr: Transcription, r: RawResult, frac: np.ndarray) -> np.ndarray:

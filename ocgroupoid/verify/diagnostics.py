@@ -97,17 +97,20 @@ def step_sizes(tr: Transcription, steps: np.ndarray) -> dict[str, float]:
             if np.isfinite(ret.step_limit)}
 
 
-def bound_report(tr: Transcription, x: np.ndarray, p: np.ndarray) -> dict[str, Any]:
+def bound_report(tr: Transcription, x: np.ndarray, p: np.ndarray, g: np.ndarray | None = None
+                 ) -> dict[str, Any]:
     """The largest violation of any bound and, per bound row, at how many of its points it
-    is active (at its lower or upper side)."""
+    is active (at its lower or upper side). ``g``: the NLP's rows at (x, p), where the caller
+    has them."""
     rows = tr.rows(Kind.INEQUALITY)
     if not rows.size:
         return {}
-    g = np.array(tr.g_fun(x, p)).ravel()
-    lbg, ubg, _, _ = (np.array(v).ravel() for v in tr.bounds_function(p))
+    rows_at = mesh.rows_of(tr, x, p, g)
+    g, lbg, ubg = rows_at
     idx = rows.ravel()
     violation = float(np.max(np.maximum(0.0, np.maximum(lbg[idx] - g[idx], g[idx] - ubg[idx]))))
-    _, side = mesh.active_sides(tr, RawResult("", x, p, np.zeros(tr.ng), 0.0, "", True, 0, 0.0))
+    _, side = mesh.active_sides(tr, RawResult("", x, p, np.zeros(tr.ng), 0.0, "", True, 0, 0.0),
+                                rows_at)
     names = tr.scheme.stages.inequality_names
     active = {}
     for name, row in zip(names, side):
@@ -142,7 +145,7 @@ def diagnose(tr: Transcription, x: np.ndarray, p: np.ndarray, lam_g: np.ndarray,
         "constraint_residual_max": float(np.max(np.abs(g[path]))) if path.size else 0.0,
         "step_angle_max": step_sizes(tr, out["steps"]),
     }
-    d.update(bound_report(tr, x, p))
+    d.update(bound_report(tr, x, p, g))
     if tr.problem.invariants:
         values = conserved_values(tr, s, out["velocities"], p)
         d["conserved_drift"] = {name: float(np.max(np.abs(C - C[0])))
