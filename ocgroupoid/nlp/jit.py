@@ -63,7 +63,8 @@ def compiled(*sets: dict[str, ca.Function]) -> tuple[list[dict[str, ca.Function]
     loaded, built = library([_renamed(functions[name], _symbol(i, name))
                              for i, functions in enumerate(sets) for name in NLP_FUNCTIONS])
     n = len(NLP_FUNCTIONS)
-    return [{name: _renamed(fn, name) for name, fn in zip(NLP_FUNCTIONS, loaded[i * n:])}
+    return [{name: _renamed(fn, name)
+             for name, fn in zip(NLP_FUNCTIONS, loaded[i * n:(i + 1) * n])}
             for i in range(len(sets))], built
 
 
