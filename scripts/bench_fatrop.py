@@ -6,7 +6,8 @@ IPOPT (fatrop failed), IPOPT's status, iterations and time, and the relative dif
 the two costs. Both backends run from the same start (the first geodesic guess) on the one
 NLP, with the file's solver options. Then the build of each backend (its ``casadi.nlpsol``
 and, for fatrop, the stage form and its Functions) on ``so3_rest_to_rest`` at N = 256, 512
-and 1024: fatrop's must grow linearly in N, as IPOPT's.
+and 1024, on CasADi's virtual machine and with jit: fatrop's must grow linearly in N, as
+IPOPT's (with jit it runs through its own C interface).
 
 Writes ``bench_fatrop.json`` and ``bench_fatrop.png`` (iterations of both against N, one
 panel per file and scheme; build times against N).
@@ -76,7 +77,10 @@ def measure(path: Path, scheme: str, N: int) -> dict[str, Any]:
 
 
 def build_times(N: int) -> dict[str, Any]:
-    """The construction of each backend on the one NLP of so3_rest_to_rest (seconds)."""
+    """The construction of each backend on the one NLP of so3_rest_to_rest (seconds): on
+    CasADi's virtual machine, and with jit from a warm cache (the library compiled by an
+    untimed build before; the best of three), where fatrop runs through its own C interface
+    (``fatrop_ocp``) instead of CasADi's nlpsol."""
     cfg = files.load(PROBLEMS / "so3_rest_to_rest.yaml", [f"horizon.N={N}"])
     d = cfg.file.discretization
     nlp = NonlinearProgram(files.build(cfg), Method(N, scheme=d.scheme,
@@ -87,7 +91,15 @@ def build_times(N: int) -> dict[str, Any]:
         t0 = time.perf_counter()
         cls(nlp, options)  # type: ignore[arg-type]  # NonlinearProgram is a Graph
         row[f"{cls.name}_build_seconds"] = time.perf_counter() - t0
+        cls(nlp, options, jit=True)  # type: ignore[arg-type]
+        times = []
+        for _ in range(3):
+            t0 = time.perf_counter()
+            cls(nlp, options, jit=True)  # type: ignore[arg-type]
+            times.append(time.perf_counter() - t0)
+        row[f"{cls.name}_jit_build_seconds"] = min(times)
     row["ratio"] = row["fatrop_build_seconds"] / row["ipopt_build_seconds"]
+    row["jit_ratio"] = row["fatrop_jit_build_seconds"] / row["ipopt_jit_build_seconds"]
     return row
 
 
@@ -116,9 +128,11 @@ def chart(rows: list[dict[str, Any]], builds: list[dict[str, Any]], out: Path) -
         ax.set_ylabel("iterations")
         ax.legend(fontsize=6)
     ax = axes.ravel()[len(keys)]
-    for backend, mark in (("ipopt", "o-"), ("fatrop", "s--")):
-        ax.loglog([b["N"] for b in builds], [b[f"{backend}_build_seconds"] for b in builds],
-                  mark, label=backend)
+    for key, mark, label in (("ipopt", "o-", "ipopt"), ("fatrop", "s--", "fatrop (nlpsol)"),
+                             ("ipopt_jit", "o:", "ipopt, jit"),
+                             ("fatrop_jit", "s-", "fatrop, jit (own interface)")):
+        ax.loglog([b["N"] for b in builds], [b[f"{key}_build_seconds"] for b in builds],
+                  mark, label=label)
     ax.set_title("build (so3_rest_to_rest)", fontsize=9)
     ax.set_xlabel("N")
     ax.set_ylabel("seconds")
@@ -173,7 +187,9 @@ def main() -> None:
           f"from fatrop's acceptable point: {sum(r['polished'] for r in done)}")
     for b in builds:
         print(f"build N={b['N']:5d}: ipopt {b['ipopt_build_seconds']:6.2f} s, fatrop "
-              f"{b['fatrop_build_seconds']:6.2f} s ({b['ratio']:.1f}x)")
+              f"{b['fatrop_build_seconds']:6.2f} s ({b['ratio']:.1f}x); with jit (warm): "
+              f"ipopt {b['ipopt_jit_build_seconds']:6.2f} s, fatrop "
+              f"{b['fatrop_jit_build_seconds']:6.2f} s ({b['jit_ratio']:.1f}x)")
 
 
 if __name__ == "__main__":

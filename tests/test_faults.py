@@ -87,16 +87,18 @@ def test_the_first_order_plate_ball_on_fatrop_returns(tmp_path: Path) -> None:
     assert "NaN detected" not in r.stderr and seconds < 30
 
 
-def hanging_heavy_top(max_seconds: float) -> tuple[og.CompiledProblem, og.Guess]:
+def hanging_heavy_top(max_seconds: float, jit: bool = False
+                      ) -> tuple[og.CompiledProblem, og.Guess]:
     """The heavy top with the first-order retraction on fatrop, and a start on which fatrop
     loops forever (once more NaN than :data:`~ocgroupoid.nlp.isolated.NAN_LIMIT` is let
-    through)."""
+    through); ``jit``: fatrop through its own C interface (``fatrop_ocp``)."""
     cfg = files.load(PROBLEMS / "heavy_top_rotors.yaml", [
         "discretization.retraction=first_order", "horizon.N=16", "solver.backend=fatrop"])
     f, d = cfg.file, cfg.file.discretization
     solver = og.compile_problem(files.build(cfg), 16, d.retraction, d.rule, f.solver.ipopt,
-                                d.scheme, backend="fatrop", max_seconds=max_seconds)
+                                d.scheme, backend="fatrop", max_seconds=max_seconds, jit=jit)
     tr = solver.transcription
+    assert (tr.fatrop.direct is not None) == jit
     guess = next(g for g in solver.guesses(tr, tr.pack(), True)
                  if g.label == "great circle, long way")
     return solver, guess
@@ -131,8 +133,9 @@ def test_a_stuck_fatrop_run_fails_before_the_deadline_and_ipopt_solves_the_start
     assert r.earlier[0][:2] == ("fatrop", fatrop.FAILED)
 
 
-def test_fatrop_stops_on_repeated_nan_and_ipopt_solves_the_start() -> None:
-    solver, guess = hanging_heavy_top(max_seconds=60.0)
+@pytest.mark.parametrize("jit", [False, True], ids=["nlpsol", "own-interface"])
+def test_fatrop_stops_on_repeated_nan_and_ipopt_solves_the_start(jit: bool) -> None:
+    solver, guess = hanging_heavy_top(max_seconds=60.0, jit=jit)
     t0 = time.perf_counter()
     r = solver.transcription.solve(guess, solver.transcription.pack())
     assert time.perf_counter() - t0 < 10

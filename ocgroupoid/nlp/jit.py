@@ -52,27 +52,30 @@ def compiler() -> str:
                       "install one, or set solver.jit: false")
 
 
-def compiled(*sets: dict[str, ca.Function]) -> tuple[list[dict[str, ca.Function]], bool]:
+def compiled(*sets: dict[str, ca.Function]
+             ) -> tuple[list[dict[str, ca.Function]], bool, Path]:
     """Each set of the Functions a backend evaluates (:data:`NLP_FUNCTIONS`) loaded from one
-    compiled library (built unless cached); and whether it was compiled now (False: found in
-    the cache). Sets that call the same stage Functions (IPOPT's beside fatrop's:
-    :class:`~ocgroupoid.nlp.assembly.Derivatives`) share their code: quadrotor_min_time,
-    order4, N = 64 compiles in 6.6 s for both, 5.9 s for fatrop's alone and 11 s for the two
-    apart. The sets after the first are in the library under numbered names (``s1_nlp_f``) and
-    loaded behind a Function of their own name (nlpsol finds its cache by name)."""
-    loaded, built = library([_renamed(functions[name], _symbol(i, name))
-                             for i, functions in enumerate(sets) for name in NLP_FUNCTIONS])
+    compiled library (built unless cached); whether it was compiled now (False: found in
+    the cache); and the library's path. Sets that call the same stage Functions (IPOPT's
+    beside fatrop's: :class:`~ocgroupoid.nlp.assembly.Derivatives`) share their code:
+    quadrotor_min_time, order4, N = 64 compiles in 6.6 s for both, 5.9 s for fatrop's alone
+    and 11 s for the two apart. The sets after the first are in the library under numbered
+    names (``s1_nlp_f``) and loaded behind a Function of their own name (nlpsol finds its
+    cache by name)."""
+    loaded, built, path = library([_renamed(functions[name], _symbol(i, name))
+                                   for i, functions in enumerate(sets)
+                                   for name in NLP_FUNCTIONS])
     n = len(NLP_FUNCTIONS)
     return [{name: _renamed(fn, name)
              for name, fn in zip(NLP_FUNCTIONS, loaded[i * n:(i + 1) * n])}
-            for i in range(len(sets))], built
+            for i in range(len(sets))], built, path
 
 
-def library(functions: list[ca.Function]) -> tuple[list[ca.Function], bool]:
+def library(functions: list[ca.Function]) -> tuple[list[ca.Function], bool, Path]:
     """``functions`` (of distinct names) as machine code: generated into one C source,
     compiled into a shared library in :func:`cache_dir` unless one of the same source and
-    flags is there (its file name is their hash), and loaded; and whether it was compiled
-    now."""
+    flags is there (its file name is their hash), and loaded; whether it was compiled now;
+    and the library's path."""
     gen = ca.CodeGenerator("ocg_jit.c", {"with_header": False})
     for fn in functions:
         gen.add(fn)
@@ -84,7 +87,7 @@ def library(functions: list[ca.Function]) -> tuple[list[ca.Function], bool]:
         built = not path.exists()
         if built:
             _build(Path(tmp, "ocg_jit.c"), path)
-    return [ca.external(fn.name(), str(path)) for fn in functions], built
+    return [ca.external(fn.name(), str(path)) for fn in functions], built, path
 
 
 def _symbol(i: int, name: str) -> str:

@@ -8,6 +8,11 @@ same stage-wise assembly IPOPT gets (:func:`~ocgroupoid.nlp.assembly.assemble`),
 rows permuted into stage order and in the signatures fatrop asks for (the Hessian whole, not
 its upper triangle, with the gradient of the Lagrangian, both summed from the stages).
 
+With ``jit`` the compiled Functions drive fatrop through its own C interface
+(:mod:`~ocgroupoid.nlp.backends.fatrop_ocp`), the same solve to the last bit as CasADi's
+fatrop ``nlpsol``, whose build grows as N² (so3 at N = 1024: 2.6 s); without ``jit``, and for
+the exported C solver, CasADi's ``nlpsol`` runs it.
+
 fatrop reads the IPOPT options it shares (:data:`SHARED_OPTIONS`, :data:`RENAMED_OPTIONS`)
 over its own (:data:`DEFAULT_FATROP`: no watchdog, more second-order corrections). It has no
 scaling of its own: it is given the NLP scaled as IPOPT scales it (:func:`row_scales`,
@@ -38,6 +43,7 @@ from ..jit import compiled
 from ..options import SolverOptions
 from ..stageform import NotStaged, StageForm, stage_form
 from .base import ACCEPTABLE, INTERRUPTED, TIMED_OUT, Backend, Graph, Run, Start
+from .fatrop_ocp import FatropOcp, Unavailable
 from .ipopt import ipopt_options
 
 #: IPOPT options fatrop also has; the others do not apply to it
@@ -253,8 +259,9 @@ class FatropBackend(Backend):
         self.jit_compiled = False
         #: ``beside`` compiled with fatrop's Functions (with jit and beside), else None
         self.compiled_beside: dict[str, ca.Function] | None = None
+        library = None
         if jit:
-            (functions, *others), self.jit_compiled = compiled(
+            (functions, *others), self.jit_compiled, library = compiled(
                 functions, *([beside] if beside is not None else []))
             self.compiled_beside = others[0] if others else None
         #: the rows' and the objective's scales at a start (:func:`_scales`)
@@ -269,22 +276,42 @@ class FatropBackend(Backend):
                                       if k in RENAMED_OPTIONS}}}
         #: the NLP in stage form, as nlpsol is given it
         self.nlp = graph
+        self._name = name
+        #: with jit, fatrop driven through its own C interface (:mod:`.fatrop_ocp`: a build
+        #: linear in N); else CasADi's nlpsol (:attr:`solver`), built here
+        self.direct: FatropOcp | None = None
+        if library is not None:
+            try:
+                self.direct = FatropOcp(sf, functions, library, self.options["fatrop"])
+            except (NotStaged, Unavailable):
+                self.direct = None
+        if self.direct is None:
+            _ = self._whole
+        self._isolated = Isolated(self._solve_here)
+        self._bounds, self._scales = Buffered(self.bounds), Buffered(self.scales)
+        #: the time the build took (stage form, Functions, jit, nlpsol or the driver's maps)
+        self.build_seconds = time.perf_counter() - t0
+
+    @cached_property
+    def solver(self) -> ca.Function:
+        """CasADi's fatrop nlpsol on the stage form (its build grows as N²: without jit it
+        is built with the backend; with jit only if the exported solver needs it)."""
         try:
-            self.solver = ca.nlpsol(name, "fatrop", graph, self.options)
+            return ca.nlpsol(self._name, "fatrop", self.nlp, self.options)
         except RuntimeError as err:
             raise ConfigError(f"fatrop rejected the NLP or its options: {err}; use "
                               "solver.backend: ipopt") from None
-        self._isolated = Isolated(self._solve_here)
-        self._bounds, self._scales = Buffered(self.bounds), Buffered(self.scales)
-        x0, p = ca.MX.sym("x0", nlp.nx), ca.MX.sym("p", nlp.np)
-        #: one solve as one call (:meth:`_solve_graph`: the scales, the bounds, fatrop and the
-        #: way back in a single Function; its stats are fatrop's): 0.1-0.6 ms a solve less than
-        #: the steps called one by one from Python (so3, N = 16...128, in pairs)
-        self._whole = Buffered(ca.Function(f"{name}_whole", [x0, p],
-                                           list(self._solve_graph(self.solver, x0, p).values()),
-                                           ["x0", "p"], list(UNSCALED)))
-        #: the time the build took (stage form, Functions, jit, nlpsol)
-        self.build_seconds = time.perf_counter() - t0
+
+    @cached_property
+    def _whole(self) -> Buffered:
+        """One solve through :attr:`solver` as one call (:meth:`_solve_graph`: the scales,
+        the bounds, fatrop and the way back in a single Function; its stats are fatrop's):
+        0.1-0.6 ms a solve less than the steps called one by one from Python (so3,
+        N = 16...128, in pairs)."""
+        x0, p = ca.MX.sym("x0", self.form.z_slot.size), ca.MX.sym("p", self.bounds.size1_in(0))
+        return Buffered(ca.Function(f"{self._name}_whole", [x0, p],
+                                    list(self._solve_graph(self.solver, x0, p).values()),
+                                    ["x0", "p"], list(UNSCALED)))
 
     def arguments(self, x0: Any, p: Any) -> dict[str, Any]:
         """The solver's inputs in stage form, for an original point x0 and parameters p (numbers,
@@ -349,6 +376,13 @@ class FatropBackend(Backend):
         """The solve itself (run by the helper process; :meth:`run` times it as the caller
         waits for it)."""
         x0, p = request
+        if self.direct is not None:
+            a = self.arguments(x0, p)
+            r, iterations, flag, value = self.direct.solve(a["x0"], a["p"], a["lbg"], a["ubg"],
+                                                           a["lbx"], a["ubx"])
+            u = self.unscaled(r, a["p"])
+            return Run(u["x"], float(u["f"][0]), u["lam_g"], u["lam_x"],
+                       STATUS.get(flag, FAILED), value == 0, iterations, 0.0)
         r = self._whole(x0=x0, p=p)
         stats = self._whole.stats()
         success, iterations = bool(stats["success"]), int(stats["iter_count"])
@@ -362,7 +396,7 @@ class FatropBackend(Backend):
         exported C solver has no IPOPT to finish from it. Built on first use."""
         options = {**self.options, "fatrop": {**self.options["fatrop"],
                                               "acceptable_iter": self.max_iter + 1}}
-        return ca.nlpsol(f"{self.solver.name()}_exported", "fatrop", self.nlp, options)
+        return ca.nlpsol(f"{self._name}_exported", "fatrop", self.nlp, options)
 
     def graph(self, x0: ca.MX, p: ca.MX, lam_g0: ca.MX | None = None,
               lam_x0: ca.MX | None = None) -> dict[str, Any]:

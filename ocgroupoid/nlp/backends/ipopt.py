@@ -103,7 +103,7 @@ class IpoptBackend(Backend):
         if compiled_functions is not None:
             self.options["cache"] = compiled_functions
         elif jit:
-            (self.options["cache"],), self.jit_compiled = compiled(evaluated(nlp))
+            (self.options["cache"],), self.jit_compiled, _ = compiled(evaluated(nlp))
         #: the compilation of jit (or the load from its cache)
         self.jit_seconds = time.perf_counter() - t0
         t0 = time.perf_counter()

@@ -1,0 +1,245 @@
+"""fatrop through its own C interface: the stage form's blocks mapped once, in time linear in N.
+
+CasADi's fatrop ``nlpsol`` derives the stage blocks of the Jacobian and the Hessian from the
+NLP's sparsity as it is built, by assigning the blocks one at a time into a sparse matrix:
+its build grows as N² (so3 at N = 1024: 2.6 s, against IPOPT's 0.015 s). fatrop itself sets
+up in time linear in N (19 ms for 1024 stages of so3's size). With ``jit`` the stage form's
+five Functions are machine code in a library of their own, and :class:`FatropOcp` drives
+fatrop's C interface (``fatrop/ocp/OCPCInterface.h``, shipped with CasADi) with them: a small
+C driver (``fatrop_ocp.c``, the callbacks of CasADi's interface) scatters each nonzero of the
+Jacobian and the Hessian to its place in the dense stage blocks by an index computed here
+(:func:`block_maps`), one per nonzero. The driver is compiled once per machine into the
+:func:`~ocgroupoid.nlp.jit.cache_dir`. The solve is the one CasADi's interface runs: the
+same Functions, callbacks, splitting of rows and bounds, and options.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import hashlib
+import os
+import subprocess
+import weakref
+from dataclasses import dataclass
+from functools import cache
+from pathlib import Path
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from ...errors import ConfigError
+from ..jit import NLP_FUNCTIONS, cache_dir, compiler
+from ..stageform import NotStaged, StageForm
+
+SOURCE = Path(__file__).with_name("fatrop_ocp.c")
+#: fatrop's kinds of option (``fatrop_ocp_c_option_type``)
+DOUBLE, INT, BOOL, STRING = range(4)
+_INT_P = ctypes.POINTER(ctypes.c_int)
+_DOUBLE_P = ctypes.POINTER(ctypes.c_double)
+_EVAL = ctypes.c_void_p
+#: the arrays of one solve: its inputs, then its outputs (``x`` is the driver's ``z``)
+SOLVE_ARRAYS = ("z0", "q", "lbz", "ubz", "lbg", "ubg", "z", "g", "lam_g", "lam_x", "f")
+
+
+class _Problem(ctypes.Structure):
+    """``struct ocg_problem`` of ``fatrop_ocp.c``."""
+
+    _fields_ = [("K", ctypes.c_int), ("nx", _INT_P), ("nu", _INT_P), ("ng", _INT_P),
+                ("col", _INT_P), ("row_ab", _INT_P), ("row_cd", _INT_P),
+                ("ab_off", _INT_P), ("cd_off", _INT_P), ("rsq_off", _INT_P),
+                ("nz", ctypes.c_int), ("n_rows", ctypes.c_int), ("nq", ctypes.c_int),
+                ("nnz_a", ctypes.c_int), ("nnz_h", ctypes.c_int), ("n_ab", ctypes.c_int),
+                ("n_cd", ctypes.c_int), ("n_rsq", ctypes.c_int),
+                ("a_kind", _INT_P), ("a_index", _INT_P), ("h_index", _INT_P),
+                ("eval", _EVAL * len(NLP_FUNCTIONS)), ("work", _EVAL * len(NLP_FUNCTIONS)),
+                ("n_options", ctypes.c_int), ("option_names", ctypes.POINTER(ctypes.c_char_p)),
+                ("option_kinds", _INT_P), ("option_values", _DOUBLE_P),
+                ("option_strings", ctypes.POINTER(ctypes.c_char_p))]
+
+
+class _Solve(ctypes.Structure):
+    """``struct ocg_solve`` of ``fatrop_ocp.c`` (its arrays by address)."""
+
+    _fields_ = [*((name, ctypes.c_void_p) for name in SOLVE_ARRAYS),
+                ("iterations", ctypes.c_int), ("return_flag", ctypes.c_int),
+                ("status", ctypes.c_int), ("bad_structure", ctypes.c_int),
+                ("seconds", ctypes.c_double)]
+
+
+class Unavailable(ConfigError):
+    """The driver does not compile here (no fatrop headers in CasADi's folder, say): fatrop
+    runs through CasADi's nlpsol instead."""
+
+
+@cache
+def driver() -> ctypes.CDLL:
+    """The compiled driver (``fatrop_ocp.c``), built once per machine and CasADi version
+    (0.3 s); :class:`Unavailable` when it does not compile."""
+    casadi_dir = Path(ca.__file__).parent
+    flags = ["-O2", "-shared", "-fPIC", f"-I{casadi_dir / 'include'}", f"-L{casadi_dir}",
+             f"-Wl,-rpath,{casadi_dir}", "-lfatrop", "-lblasfeo", "-lm"]
+    source = SOURCE.read_bytes()
+    digest = hashlib.sha256(source + " ".join(flags).encode() + ca.CasadiMeta.version().encode())
+    path = cache_dir() / f"ocg_fatrop_{digest.hexdigest()[:24]}.so"
+    if not path.exists():
+        path.parent.mkdir(parents=True, exist_ok=True)
+        partial = path.with_name(f".{path.name}.{os.getpid()}")
+        cmd = [compiler(), str(SOURCE), "-o", str(partial), *flags]
+        r = subprocess.run(cmd, capture_output=True, text=True)
+        if r.returncode != 0:
+            partial.unlink(missing_ok=True)
+            raise Unavailable(f"fatrop's driver did not compile ({cmd[0]}): "
+                              f"{r.stderr.strip()[-400:]}")
+        os.replace(partial, path)
+    lib = ctypes.CDLL(str(path))
+    lib.ocg_context_new.argtypes = [ctypes.POINTER(_Problem)]
+    lib.ocg_context_new.restype = ctypes.c_void_p
+    lib.ocg_context_free.argtypes = [ctypes.c_void_p]
+    lib.ocg_fatrop_solve.argtypes = [ctypes.c_void_p, ctypes.POINTER(_Solve)]
+    lib.ocg_fatrop_solve.restype = None
+    lib.ocg_option_kind.argtypes = [ctypes.c_char_p]
+    return lib
+
+
+@dataclass(frozen=True)
+class BlockMaps:
+    """Where each nonzero of the Jacobian and of the Hessian goes in the dense stage blocks:
+    ``AB_k`` (the gap rows into x_{k+1}, negated: dF_k/d(x_k, u_k)), ``CD_k`` (stage k's
+    rows) and ``RSQ_k`` (the Hessian of stage k), each column-major over ``(x_k, u_k)``;
+    ``a_kind`` 0 AB, 1 CD, 2 the +1 on x_{k+1} of a gap row. Offsets per stage."""
+
+    col: np.ndarray
+    row_ab: np.ndarray
+    row_cd: np.ndarray
+    ab_off: np.ndarray
+    cd_off: np.ndarray
+    rsq_off: np.ndarray
+    a_kind: np.ndarray
+    a_index: np.ndarray
+    h_index: np.ndarray
+
+
+def block_maps(sf: StageForm, jac: ca.Sparsity, hess: ca.Sparsity) -> BlockMaps:
+    """The maps of :class:`BlockMaps` for the stage form's Jacobian and Hessian patterns (CasADi's
+    nonzero order); :class:`NotStaged` for a Jacobian nonzero outside every block."""
+    nx, nu, ng = (np.asarray(v, dtype=np.int64) for v in (sf.nx, sf.nu, sf.ng))
+    n = nx + nu
+    K = sf.K
+    col = np.concatenate([[0], np.cumsum(n)])
+    gaps = np.append(nx[1:], 0)  # gap rows into x_{k+1} of stage k (none after K)
+    row_ab = np.concatenate([[0], np.cumsum(gaps + ng)])[:K + 1]
+    row_cd = row_ab + gaps
+    ab_off = np.concatenate([[0], np.cumsum(gaps * n)])
+    cd_off = np.concatenate([[0], np.cumsum(ng * n)])
+    rsq_off = np.concatenate([[0], np.cumsum(n * n)])
+    stage_of_col = np.repeat(np.arange(K + 1), n)
+
+    rows, cols = (np.asarray(v, dtype=np.int64) for v in jac.get_triplet())
+    k = stage_of_col[cols]
+    c = cols - col[k]
+    kind = np.full(rows.size, -1)
+    index = np.zeros(rows.size, dtype=np.int64)
+    in_ab = (rows >= row_ab[k]) & (rows < row_cd[k])
+    in_cd = (rows >= row_cd[k]) & (rows < row_cd[k] + ng[k])
+    prev = np.maximum(k - 1, 0)  # x_k in the gap rows of stage k - 1
+    eye = (k > 0) & (c < nx[k]) & (rows == row_ab[prev] + c)
+    kind[in_ab], index[in_ab] = 0, (ab_off[k] + c * gaps[k] + rows - row_ab[k])[in_ab]
+    kind[in_cd], index[in_cd] = 1, (cd_off[k] + c * ng[k] + rows - row_cd[k])[in_cd]
+    kind[eye] = 2
+    if np.any(kind < 0):
+        i = int(np.flatnonzero(kind < 0)[0])
+        raise NotStaged(f"Jacobian entry ({rows[i]}, {cols[i]}) lies outside the stage blocks")
+
+    h_rows, h_cols = (np.asarray(v, dtype=np.int64) for v in hess.get_triplet())
+    hk = stage_of_col[h_cols]
+    inside = stage_of_col[h_rows] == hk
+    h_index = np.where(inside, rsq_off[hk] + (h_cols - col[hk]) * n[hk] + h_rows - col[hk], -1)
+    return BlockMaps(col[:-1], row_ab, row_cd, ab_off, cd_off, rsq_off, kind, index, h_index)
+
+
+def _ints(a: Any) -> np.ndarray:
+    return np.ascontiguousarray(a, dtype=np.intc)
+
+
+def _doubles(a: Any) -> np.ndarray:
+    return np.ascontiguousarray(np.ravel(a), dtype=float)
+
+
+def _ptr(a: np.ndarray, kind: Any) -> Any:
+    return a.ctypes.data_as(kind)
+
+
+class FatropOcp:
+    """fatrop on a stage form through its C interface, with the five compiled Functions of
+    ``library`` (their names :data:`~ocgroupoid.nlp.jit.NLP_FUNCTIONS`, as
+    ``functions`` describes them) and fatrop's ``options``; :meth:`solve` runs it."""
+
+    def __init__(self, sf: StageForm, functions: dict[str, ca.Function], library: Path,
+                 options: dict[str, Any]) -> None:
+        jac = functions["nlp_jac_g"].sparsity_out(1)
+        hess = functions["nlp_hess_l"].sparsity_out(1)
+        for name, fn in functions.items():  # the driver reads and writes dense vectors
+            for i in range(fn.n_out()):
+                if not (fn.sparsity_out(i).is_dense() or (name, i) in
+                        (("nlp_jac_g", 1), ("nlp_hess_l", 1))):
+                    raise NotStaged(f"{name} output {i} is not dense")
+        maps = block_maps(sf, jac, hess)
+        self.form, self.n_rows, self.nq = sf, sf.order.size, functions["nlp_g"].size1_in(1)
+        self._lib = driver()
+        self.library = library
+        self._code = ctypes.CDLL(str(library))
+        keep: dict[str, Any] = {name: _ints(v) for name, v in (
+            ("nx", sf.nx), ("nu", sf.nu), ("ng", sf.ng), ("col", maps.col),
+            ("row_ab", maps.row_ab), ("row_cd", maps.row_cd), ("ab_off", maps.ab_off),
+            ("cd_off", maps.cd_off), ("rsq_off", maps.rsq_off), ("a_kind", maps.a_kind),
+            ("a_index", maps.a_index), ("h_index", maps.h_index))}
+        kinds = {name: self._lib.ocg_option_kind(name.encode()) for name in options}
+        unknown = [name for name, kind in kinds.items() if kind < 0]
+        if unknown:
+            raise ConfigError(f"fatrop has no option {', '.join(unknown)}")
+        names = [name.encode() for name in options]
+        strings = [str(v).encode() if kinds[k] == STRING else b"" for k, v in options.items()]
+        keep["names"] = (ctypes.c_char_p * len(names))(*names)
+        keep["strings"] = (ctypes.c_char_p * len(strings))(*strings)
+        keep["kinds"] = _ints([kinds[k] for k in options])
+        keep["values"] = _doubles([0.0 if kinds[k] == STRING else float(v)
+                                   for k, v in options.items()])
+        self._keep = keep  # the arrays the C struct points into
+        p = _Problem()
+        p.K, p.nz, p.n_rows, p.nq = sf.K, sf.nz, self.n_rows, self.nq
+        p.nnz_a, p.nnz_h = jac.nnz(), hess.nnz()
+        p.n_ab, p.n_cd, p.n_rsq = int(maps.ab_off[-1]), int(maps.cd_off[-1]), \
+            int(maps.rsq_off[-1])
+        for name, value in keep.items():
+            if name in {field[0] for field in _Problem._fields_}:
+                setattr(p, name, _ptr(value, _INT_P))
+        for i, name in enumerate(NLP_FUNCTIONS):
+            p.eval[i] = ctypes.cast(getattr(self._code, name), ctypes.c_void_p)
+            p.work[i] = ctypes.cast(getattr(self._code, f"{name}_work"), ctypes.c_void_p)
+        p.n_options = len(options)
+        p.option_names, p.option_strings = keep["names"], keep["strings"]
+        p.option_kinds = _ptr(keep["kinds"], _INT_P)
+        p.option_values = _ptr(keep["values"], _DOUBLE_P)
+        self._problem = p
+        context = self._lib.ocg_context_new(ctypes.byref(p))
+        if not context:
+            raise MemoryError("fatrop's driver could not allocate its work memory")
+        self._context = context
+        weakref.finalize(self, self._lib.ocg_context_free, context)
+
+    def solve(self, z0: Any, q: Any, lbg: Any, ubg: Any, lbz: Any, ubz: Any
+              ) -> tuple[dict[str, np.ndarray], int, int, int]:
+        """fatrop from z0 with parameters q and the stage form's bounds: the solution
+        ``x, f, g, lam_g, lam_x`` (stage form, scaled as the Functions are), its
+        iterations, fatrop's return flag and its return value (0: converged)."""
+        inputs = [_doubles(v) for v in (z0, q, lbz, ubz, lbg, ubg)]
+        nz, n_rows = self.form.nz, self.n_rows
+        x, g, lam_g, lam_x, f = np.split(np.zeros(2 * nz + 2 * n_rows + 1),
+                                         np.cumsum([nz, n_rows, n_rows, nz]))
+        out = {"x": x, "g": g, "lam_g": lam_g, "lam_x": lam_x, "f": f}
+        s = _Solve(*(a.ctypes.data for a in (*inputs, x, g, lam_g, lam_x, f)))
+        self._lib.ocg_fatrop_solve(self._context, ctypes.byref(s))
+        if s.bad_structure:
+            raise NotStaged("a gap row's coefficient on x_{k+1} is not 1")
+        return out, s.iterations, s.return_flag, s.status
