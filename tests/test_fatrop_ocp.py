@@ -164,3 +164,23 @@ def test_an_option_fatrop_does_not_have_is_refused() -> None:
     with pytest.raises(ConfigError, match="no_such_option"):
         FatropOcp(fb.form, fb.options["cache"], fb.direct.library, {"no_such_option": 1})
 
+
+
+def test_where_the_driver_does_not_compile_fatrop_runs_through_nlpsol(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    from ocgroupoid.nlp.backends import fatrop_ocp
+
+    def no_headers(*args: object) -> None:
+        raise ConfigError("fatrop/ocp/OCPCInterface.h: No such file or directory")
+
+    monkeypatch.setenv("OCGROUPOID_JIT_CACHE", str(tmp_path))
+    monkeypatch.setattr(fatrop_ocp, "build", no_headers)
+    fatrop_ocp.driver.cache_clear()
+    try:
+        with pytest.raises(fatrop_ocp.Unavailable, match="No such file"):
+            fatrop_ocp.driver()
+        tr, fb = fatrop("so3_rest_to_rest", 4)
+        p = tr.pack()
+        assert fb.direct is None and tr.solve(tr.guesses(p)[0], p).success
+    finally:
+        fatrop_ocp.driver.cache_clear()

@@ -22,6 +22,7 @@ import os
 import shutil
 import subprocess
 import tempfile
+from collections.abc import Sequence
 from pathlib import Path
 
 import casadi as ca
@@ -86,7 +87,7 @@ def library(functions: list[ca.Function]) -> tuple[list[ca.Function], bool, Path
         path = cache_dir() / f"ocg_jit_{digest}.so"
         built = not path.exists()
         if built:
-            _build(Path(tmp, "ocg_jit.c"), path)
+            build(Path(tmp, "ocg_jit.c"), path)
     return [ca.external(fn.name(), str(path)) for fn in functions], built, path
 
 
@@ -103,9 +104,10 @@ def _renamed(fn: ca.Function, name: str) -> ca.Function:
     return ca.Function(name, args, fn.call(args), fn.name_in(), fn.name_out())
 
 
-def _build(source: Path, library: Path) -> None:
-    """Compile ``source`` into ``library`` (written under a temporary name, then renamed:
-    concurrent builders of the same structure never load a half-written file)."""
+def build(source: Path, library: Path, flags: Sequence[str] = (*CFLAGS, "-lm")) -> None:
+    """Compile ``source`` into ``library`` with ``flags`` (written under a temporary name,
+    then renamed: concurrent builders of the same structure never load a half-written
+    file)."""
     try:
         library.parent.mkdir(parents=True, exist_ok=True)
     except OSError as e:
@@ -113,7 +115,7 @@ def _build(source: Path, library: Path) -> None:
                           f"({e.strerror or e}); set OCGROUPOID_JIT_CACHE to a writable "
                           "folder") from None
     partial = library.with_name(f".{library.name}.{os.getpid()}")
-    cmd = [compiler(), *CFLAGS, str(source), "-o", str(partial), "-lm"]
+    cmd = [compiler(), str(source), "-o", str(partial), *flags]
     r = subprocess.run(cmd, capture_output=True, text=True)
     if r.returncode != 0:
         partial.unlink(missing_ok=True)

@@ -493,6 +493,7 @@ void ocg_fatrop_solve(struct ocg_context *c, struct ocg_solve *s) {
   double *out[1];
   int n_out[1];
   d->s = s;
+  memset(d->lam, 0, sizeof(double) * p->n_rows); /* rows without bounds keep multiplier 0 */
   ocg_split(d);
   if (!c->solver || memcmp(c->split, c->previous, sizeof(int) * (size_t)c->n_split) != 0) {
     if (c->solver) fatrop_ocp_c_destroy(c->solver);

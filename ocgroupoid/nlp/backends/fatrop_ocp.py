@@ -17,8 +17,6 @@ from __future__ import annotations
 
 import ctypes
 import hashlib
-import os
-import subprocess
 import weakref
 from dataclasses import dataclass
 from functools import cache
@@ -29,7 +27,7 @@ import casadi as ca
 import numpy as np
 
 from ...errors import ConfigError
-from ..jit import NLP_FUNCTIONS, cache_dir, compiler
+from ..jit import NLP_FUNCTIONS, build, cache_dir
 from ..stageform import NotStaged, StageForm
 
 SOURCE = Path(__file__).with_name("fatrop_ocp.c")
@@ -83,15 +81,10 @@ def driver() -> ctypes.CDLL:
     digest = hashlib.sha256(source + " ".join(flags).encode() + ca.CasadiMeta.version().encode())
     path = cache_dir() / f"ocg_fatrop_{digest.hexdigest()[:24]}.so"
     if not path.exists():
-        path.parent.mkdir(parents=True, exist_ok=True)
-        partial = path.with_name(f".{path.name}.{os.getpid()}")
-        cmd = [compiler(), str(SOURCE), "-o", str(partial), *flags]
-        r = subprocess.run(cmd, capture_output=True, text=True)
-        if r.returncode != 0:
-            partial.unlink(missing_ok=True)
-            raise Unavailable(f"fatrop's driver did not compile ({cmd[0]}): "
-                              f"{r.stderr.strip()[-400:]}")
-        os.replace(partial, path)
+        try:
+            build(SOURCE, path, flags)
+        except ConfigError as err:
+            raise Unavailable(f"fatrop's own interface did not compile: {err}") from None
     lib = ctypes.CDLL(str(path))
     lib.ocg_context_new.argtypes = [ctypes.POINTER(_Problem)]
     lib.ocg_context_new.restype = ctypes.c_void_p
