@@ -34,7 +34,7 @@ struct ocg_problem {
   const int *col;                /* first column of stage k (x_k, then u_k) */
   const int *row_ab, *row_cd;    /* first gap row into x_{k+1}; first row of stage k */
   const int *ab_off, *cd_off, *rsq_off; /* offsets of the dense stage blocks */
-  int nz, n_rows, nq, nnz_a, nnz_h, n_ab, n_cd, n_rsq;
+  int nz, n_rows, nnz_a, nnz_h, n_ab, n_cd, n_rsq;
   const int *a_kind, *a_index;   /* per Jacobian nonzero: block kind and index in it */
   const int *h_index;            /* per Hessian nonzero: index in RSQ, or -1 */
   ocg_eval eval[OCG_NFUN];
@@ -51,7 +51,6 @@ struct ocg_solve {
   const double *z0, *q, *lbz, *ubz, *lbg, *ubg;
   double *z, *g, *lam_g, *lam_x, *f;
   int iterations, return_flag, status, bad_structure;
-  double seconds;
 };
 
 struct ocg_data {
@@ -508,7 +507,6 @@ void ocg_fatrop_solve(struct ocg_context *c, struct ocg_solve *s) {
   stats = fatrop_ocp_c_get_stats(c->solver);
   s->iterations = stats->iterations_count;
   s->return_flag = stats->return_flag;
-  s->seconds = stats->time_total;
 
   ocg_read_primal(p, primal->pa, s->z, dims);
   memset(s->lam_g, 0, sizeof(double) * p->n_rows);

@@ -31,8 +31,9 @@ from ..jit import NLP_FUNCTIONS, build, cache_dir
 from ..stageform import NotStaged, StageForm
 
 SOURCE = Path(__file__).with_name("fatrop_ocp.c")
-#: fatrop's kinds of option (``fatrop_ocp_c_option_type``)
-DOUBLE, INT, BOOL, STRING = range(4)
+#: fatrop's kind of option for strings (``fatrop_ocp_c_option_type``: 0 double, 1 int,
+#: 2 bool, 3 string)
+STRING = 3
 _INT_P = ctypes.POINTER(ctypes.c_int)
 _DOUBLE_P = ctypes.POINTER(ctypes.c_double)
 _EVAL = ctypes.c_void_p
@@ -46,7 +47,7 @@ class _Problem(ctypes.Structure):
     _fields_ = [("K", ctypes.c_int), ("nx", _INT_P), ("nu", _INT_P), ("ng", _INT_P),
                 ("col", _INT_P), ("row_ab", _INT_P), ("row_cd", _INT_P),
                 ("ab_off", _INT_P), ("cd_off", _INT_P), ("rsq_off", _INT_P),
-                ("nz", ctypes.c_int), ("n_rows", ctypes.c_int), ("nq", ctypes.c_int),
+                ("nz", ctypes.c_int), ("n_rows", ctypes.c_int),
                 ("nnz_a", ctypes.c_int), ("nnz_h", ctypes.c_int), ("n_ab", ctypes.c_int),
                 ("n_cd", ctypes.c_int), ("n_rsq", ctypes.c_int),
                 ("a_kind", _INT_P), ("a_index", _INT_P), ("h_index", _INT_P),
@@ -61,8 +62,7 @@ class _Solve(ctypes.Structure):
 
     _fields_ = [*((name, ctypes.c_void_p) for name in SOLVE_ARRAYS),
                 ("iterations", ctypes.c_int), ("return_flag", ctypes.c_int),
-                ("status", ctypes.c_int), ("bad_structure", ctypes.c_int),
-                ("seconds", ctypes.c_double)]
+                ("status", ctypes.c_int), ("bad_structure", ctypes.c_int)]
 
 
 class Unavailable(ConfigError):
@@ -178,42 +178,41 @@ class FatropOcp:
                         (("nlp_jac_g", 1), ("nlp_hess_l", 1))):
                     raise NotStaged(f"{name} output {i} is not dense")
         maps = block_maps(sf, jac, hess)
-        self.form, self.n_rows, self.nq = sf, sf.order.size, functions["nlp_g"].size1_in(1)
+        self.form, self.n_rows = sf, sf.order.size
         self._lib = driver()
         self.library = library
         self._code = ctypes.CDLL(str(library))
-        keep: dict[str, Any] = {name: _ints(v) for name, v in (
-            ("nx", sf.nx), ("nu", sf.nu), ("ng", sf.ng), ("col", maps.col),
-            ("row_ab", maps.row_ab), ("row_cd", maps.row_cd), ("ab_off", maps.ab_off),
-            ("cd_off", maps.cd_off), ("rsq_off", maps.rsq_off), ("a_kind", maps.a_kind),
-            ("a_index", maps.a_index), ("h_index", maps.h_index))}
         kinds = {name: self._lib.ocg_option_kind(name.encode()) for name in options}
         unknown = [name for name, kind in kinds.items() if kind < 0]
         if unknown:
             raise ConfigError(f"fatrop has no option {', '.join(unknown)}")
+        arrays = {name: _ints(v) for name, v in (
+            ("nx", sf.nx), ("nu", sf.nu), ("ng", sf.ng), ("col", maps.col),
+            ("row_ab", maps.row_ab), ("row_cd", maps.row_cd), ("ab_off", maps.ab_off),
+            ("cd_off", maps.cd_off), ("rsq_off", maps.rsq_off), ("a_kind", maps.a_kind),
+            ("a_index", maps.a_index), ("h_index", maps.h_index))}
         names = [name.encode() for name in options]
         strings = [str(v).encode() if kinds[k] == STRING else b"" for k, v in options.items()]
-        keep["names"] = (ctypes.c_char_p * len(names))(*names)
-        keep["strings"] = (ctypes.c_char_p * len(strings))(*strings)
-        keep["kinds"] = _ints([kinds[k] for k in options])
-        keep["values"] = _doubles([0.0 if kinds[k] == STRING else float(v)
-                                   for k, v in options.items()])
-        self._keep = keep  # the arrays the C struct points into
+        option_kinds = _ints([kinds[k] for k in options])
+        values = _doubles([0.0 if kinds[k] == STRING else float(v) for k, v in options.items()])
         p = _Problem()
-        p.K, p.nz, p.n_rows, p.nq = sf.K, sf.nz, self.n_rows, self.nq
+        p.K, p.nz, p.n_rows = sf.K, sf.nz, self.n_rows
         p.nnz_a, p.nnz_h = jac.nnz(), hess.nnz()
-        p.n_ab, p.n_cd, p.n_rsq = int(maps.ab_off[-1]), int(maps.cd_off[-1]), \
-            int(maps.rsq_off[-1])
-        for name, value in keep.items():
-            if name in {field[0] for field in _Problem._fields_}:
-                setattr(p, name, _ptr(value, _INT_P))
+        p.n_ab, p.n_cd, p.n_rsq = (int(offsets[-1]) for offsets in
+                                   (maps.ab_off, maps.cd_off, maps.rsq_off))
+        for name, value in arrays.items():
+            setattr(p, name, _ptr(value, _INT_P))
         for i, name in enumerate(NLP_FUNCTIONS):
             p.eval[i] = ctypes.cast(getattr(self._code, name), ctypes.c_void_p)
             p.work[i] = ctypes.cast(getattr(self._code, f"{name}_work"), ctypes.c_void_p)
+        c_names = (ctypes.c_char_p * len(names))(*names)
+        c_strings = (ctypes.c_char_p * len(strings))(*strings)
         p.n_options = len(options)
-        p.option_names, p.option_strings = keep["names"], keep["strings"]
-        p.option_kinds = _ptr(keep["kinds"], _INT_P)
-        p.option_values = _ptr(keep["values"], _DOUBLE_P)
+        p.option_names, p.option_strings = c_names, c_strings
+        p.option_kinds = _ptr(option_kinds, _INT_P)
+        p.option_values = _ptr(values, _DOUBLE_P)
+        #: what the C struct points into, kept alive with it
+        self._keep = (arrays, option_kinds, values, c_names, c_strings)
         self._problem = p
         context = self._lib.ocg_context_new(ctypes.byref(p))
         if not context:
