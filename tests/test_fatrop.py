@@ -242,19 +242,22 @@ def test_jit_compiles_ipopts_functions_beside_fatrops(tmp_path: Path, monkeypatc
 
 def test_fatrop_reads_the_ipopt_options_it_shares() -> None:
     """tol and max_iter pass through, constr_mult_init_max (zero initial multipliers, our
-    default) becomes fatrop's lam_max and acceptable_tol its tol_acceptable (else its
-    acceptable stop's own, 1e-5), and IPOPT-only options stay with IPOPT; with zero
-    initial multipliers fatrop needs no more iterations than IPOPT on the so3 slew."""
+    default) becomes fatrop's lam_max, acceptable_tol its tol_acceptable (else its
+    acceptable stop's own, 1e-5) and perturb_dec_fact its kappa_wmin, and IPOPT-only
+    options stay with IPOPT; with zero initial multipliers fatrop needs no more iterations
+    than IPOPT on the so3 slew."""
     cfg = files.load(ROOT / "problems" / "so3_rest_to_rest.yaml")
     pb = files.build(cfg)
     tr = compile_problem(pb, 32, ipopt={"tol": 1e-9, "max_iter": 77, "linear_solver": "mumps",
-                                        "acceptable_tol": 1e-7}, backend="fatrop").transcription
+                                        "acceptable_tol": 1e-7, "perturb_dec_fact": 0.1},
+                         backend="fatrop").transcription
     opts = tr.fatrop.options["fatrop"]
     assert (opts["tol"], opts["max_iter"], opts["lam_max"]) == (1e-9, 77, 0.0)
     assert (opts["tol_acceptable"], opts["acceptable_iter"]) == (1e-7, 20)
+    assert opts["kappa_wmin"] == 0.1 and "perturb_dec_fact" not in opts
     assert "linear_solver" not in opts
     plain = compile_problem(pb, 32, backend="fatrop").transcription.fatrop.options["fatrop"]
-    assert plain["tol_acceptable"] == 1e-5
+    assert plain["tol_acceptable"] == 1e-5 and "kappa_wmin" not in plain
     ipopt = transcription("so3_rest_to_rest", "order2", N=32)
     p = tr.pack()
     guess = tr.guesses(p)[0]

@@ -95,8 +95,10 @@ ACCEPTABLE_STOP: dict[str, Any] = {"tol_acceptable": 1e-5, "acceptable_iter": 20
 #: IPOPT options fatrop has under another name: constr_mult_init_max 0 (our default: start from
 #: zero multipliers, not least-squares ones) is fatrop's lam_max 0 (measured on so3, N = 256:
 #: 7 -> 4 iterations, as IPOPT's; the other problem files unchanged); acceptable_tol is
-#: fatrop's tol_acceptable (:data:`ACCEPTABLE_STOP`)
-RENAMED_OPTIONS = {"constr_mult_init_max": "lam_max", "acceptable_tol": "tol_acceptable"}
+#: fatrop's tol_acceptable (:data:`ACCEPTABLE_STOP`); perturb_dec_fact (how fast the
+#: Hessian's regularisation falls back, 1/3 by default) is fatrop's kappa_wmin
+RENAMED_OPTIONS = {"constr_mult_init_max": "lam_max", "acceptable_tol": "tol_acceptable",
+                   "perturb_dec_fact": "kappa_wmin"}
 #: what a failed fatrop solve reports where IPOPT has no name for the reason
 FAILED = "Fatrop_Failed"
 #: fatrop's return flags (``stats()["fatrop"]["return_flag"]``, its ``IpSolverReturnFlag``)
