@@ -497,6 +497,12 @@ void ocg_fatrop_solve(struct ocg_context *c, struct ocg_solve *s) {
   if (!c->solver || memcmp(c->split, c->previous, sizeof(int) * (size_t)c->n_split) != 0) {
     if (c->solver) fatrop_ocp_c_destroy(c->solver);
     c->solver = fatrop_ocp_c_create(&d->ocp, 0, 0);
+    if (!c->solver) { /* fatrop refused the problem: a failed solve from z0 */
+      memcpy(s->z, s->z0, sizeof(double) * p->nz);
+      s->status = s->return_flag = -1;
+      s->iterations = 0;
+      return;
+    }
     ocg_options(p, c->solver);
     memcpy(c->previous, c->split, sizeof(int) * (size_t)c->n_split);
   }
