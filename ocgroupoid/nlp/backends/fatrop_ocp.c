@@ -88,6 +88,16 @@ static void ocg_call(struct ocg_data *d, int i, const double **in, int n_in, dou
   }
 }
 
+/* Function i (f, g, the gradient of f or the Jacobian of g) at the point x with this
+ * solve's parameters: its first n_res outputs into out (of n_out nonzeros each). */
+static void ocg_at(struct ocg_data *d, int i, const double *x, double **out, const int *n_out,
+                   int n_res) {
+  const double *in[2];
+  in[0] = x;
+  in[1] = d->s->q;
+  ocg_call(d, i, in, 2, out, n_out, n_res);
+}
+
 /* primal_data holds per stage [u_k, x_k]; z holds [x_k, u_k] */
 static void ocg_read_primal(const struct ocg_problem *p, const double *primal, double *z,
                             const struct FatropOcpCDims *s) {
@@ -113,14 +123,12 @@ static fatrop_int ocg_full_constr_jac(const double *primal, const double *sp, co
                                       const struct FatropOcpCDims *s, void *user) {
   struct ocg_data *d = (struct ocg_data *)user;
   const struct ocg_problem *p = d->p;
-  const double *in[2];
   double *out[2];
   int n_out[2], i;
   ocg_read_primal(p, primal, d->x, s);
-  in[0] = d->x; in[1] = d->s->q;
   out[0] = d->g; out[1] = d->a;
   n_out[0] = p->n_rows; n_out[1] = p->nnz_a;
-  ocg_call(d, OCG_JAC_G, in, 2, out, n_out, 2);
+  ocg_at(d, OCG_JAC_G, d->x, out, n_out, 2);
   for (i = 0; i < p->nnz_a; ++i) {
     switch (p->a_kind[i]) {
       case OCG_AB: d->AB[p->a_index[i]] = -d->a[i]; break;
@@ -135,13 +143,9 @@ static fatrop_int ocg_full_contr_viol(const double *primal, const double *sp, co
                                       double *res, const struct FatropOcpCDims *s, void *user) {
   struct ocg_data *d = (struct ocg_data *)user;
   const struct ocg_problem *p = d->p;
-  const double *in[2];
-  double *out[1];
-  int n_out[1], i, k, column;
+  int i, k, column;
   ocg_read_primal(p, primal, d->x, s);
-  in[0] = d->x; in[1] = d->s->q;
-  out[0] = d->g; n_out[0] = p->n_rows;
-  ocg_call(d, OCG_G, in, 2, out, n_out, 1);
+  ocg_at(d, OCG_G, d->x, &d->g, &p->n_rows, 1);
   for (k = 0; k < s->K; ++k) {
     column = 0;
     for (i = d->a_ineq_idx[k]; i < d->a_ineq_idx[k + 1]; ++i)
@@ -165,13 +169,9 @@ static fatrop_int ocg_full_obj_grad(double scale, const double *primal, const do
                                     const struct FatropOcpCDims *s, void *user) {
   struct ocg_data *d = (struct ocg_data *)user;
   const struct ocg_problem *p = d->p;
-  const double *in[2];
-  double *out[1];
-  int n_out[1], i;
+  int i;
   ocg_read_primal(p, primal, d->x, s);
-  in[0] = d->x; in[1] = d->s->q;
-  out[0] = d->g; n_out[0] = p->nz;
-  ocg_call(d, OCG_GRAD_F, in, 2, out, n_out, 1);
+  ocg_at(d, OCG_GRAD_F, d->x, &d->g, &p->nz, 1);
   ocg_write_primal(p, d->g, res, s);
   for (i = 0; i < p->nz; ++i) res[i] *= scale;
   return 1;
@@ -181,13 +181,9 @@ static fatrop_int ocg_full_obj(double scale, const double *primal, const double 
                                const double *gp, double *res, const struct FatropOcpCDims *s,
                                void *user) {
   struct ocg_data *d = (struct ocg_data *)user;
-  const double *in[2];
-  double *out[1];
-  int n_out[1] = {1};
+  const int one = 1;
   ocg_read_primal(d->p, primal, d->x, s);
-  in[0] = d->x; in[1] = d->s->q;
-  out[0] = res;
-  ocg_call(d, OCG_F, in, 2, out, n_out, 1);
+  ocg_at(d, OCG_F, d->x, &res, &one, 1);
   *res *= scale;
   return 1;
 }
@@ -488,9 +484,7 @@ void ocg_fatrop_solve(struct ocg_context *c, struct ocg_solve *s) {
   const struct blasfeo_dvec *primal, *dual;
   const struct FatropOcpCDims *dims;
   const struct FatropOcpCStats *stats;
-  const double *in[2];
-  double *out[1];
-  int n_out[1];
+  const int one = 1;
   d->s = s;
   memset(d->lam, 0, sizeof(double) * p->n_rows); /* rows without bounds keep multiplier 0 */
   ocg_split(d);
@@ -534,9 +528,6 @@ void ocg_fatrop_solve(struct ocg_context *c, struct ocg_solve *s) {
       s->lam_g[p->row_ab[k] + i] = -dual->pa[dims->dyn_eq_offs[k] + i];
 
   /* the cost and the rows at the solution */
-  in[0] = s->z; in[1] = s->q;
-  out[0] = s->f; n_out[0] = 1;
-  ocg_call(d, OCG_F, in, 2, out, n_out, 1);
-  out[0] = s->g; n_out[0] = p->n_rows;
-  ocg_call(d, OCG_G, in, 2, out, n_out, 1);
+  ocg_at(d, OCG_F, s->z, &s->f, &one, 1);
+  ocg_at(d, OCG_G, s->z, &s->g, &p->n_rows, 1);
 }
