@@ -10,8 +10,14 @@ less those: the KKT factorisations and solves — MUMPS for IPOPT, fatrop's stag
 and its set-up in every call — and the method's own linear algebra), and the Python around
 the call (our wall time minus the solver's: CasADi's conversion of the numpy inputs and
 outputs, which the backends' own calls avoid, :mod:`~ocgroupoid.nlp.buffered`, and what of
-fatrop's set-up falls outside CasADi's timer). Each divided by the iterations, in
-milliseconds. The median of :data:`REPEATS` solves per row.
+fatrop's set-up falls outside CasADi's timer). fatrop with ``jit`` runs as the backend runs
+it, through its own C interface in this process
+(:mod:`~ocgroupoid.nlp.backends.fatrop_ocp`), timed by its driver
+(:class:`~ocgroupoid.nlp.backends.fatrop_ocp.SolveTimes`): the evaluations during fatrop's
+call, fatrop's own (the call less those: its Riccati factorisations and solves, its line
+search, the callbacks' copies of the stage blocks), and the Python around the call (the
+scaled arguments and the way back). Each divided by the iterations, in milliseconds. The
+median of :data:`REPEATS` solves per row.
 
 Beside it, per solve: the same start solved as a caller solves it
 (:meth:`~ocgroupoid.nlp.transcription.Transcription.solve`, the time the work-precision bench
@@ -73,10 +79,30 @@ def one(path: Path, backend: str, jit: bool) -> dict[str, Any] | None:
     else:
         lbg, ubg, lbx, ubx = runner.bounds(p)
         arguments = {"x0": x0, "p": p, "lbg": lbg, "ubg": ubg, "lbx": lbx, "ubx": ubx}
-    # the backend's solver with CasADi's timer of the whole call (record_time), which the
-    # backend's own leaves out; called plainly (through buffers, as the backends call
-    # theirs, CasADi's counters add up over the calls and the total reads 0)
-    timed = ca.nlpsol("timed", backend, runner.nlp, {**runner.options, "record_time": True})
+    direct = getattr(runner, "direct", None)
+    if direct is not None:  # fatrop with jit: its own C interface, in this process
+        def call() -> None:
+            runner._solve_here((x0, p))
+
+        def breakdown() -> tuple[int, bool, float, dict[str, float]]:
+            run = runner._solve_here((x0, p))
+            times = direct.times
+            return run.iterations, run.success, times.solve, times.evaluations
+    else:
+        # the backend's solver with CasADi's timer of the whole call (record_time), which
+        # the backend's own leaves out; called plainly (through buffers, as the backends
+        # call theirs, CasADi's counters add up over the calls and the total reads 0)
+        timed = ca.nlpsol("timed", backend, runner.nlp, {**runner.options, "record_time": True})
+
+        def call() -> None:
+            timed(**arguments)
+
+        def breakdown() -> tuple[int, bool, float, dict[str, float]]:
+            timed(**arguments)
+            stats = timed.stats()
+            return (int(stats["iter_count"]), bool(stats["success"]),
+                    float(stats["t_wall_total"]),
+                    {key: float(stats.get(f"t_wall_{key}", 0.0)) for key in EVALUATIONS})
     rows = []
     walls, solves = [], []
     tr.solve(guess, p)  # not timed: fatrop's helper process starts at the first solve
@@ -85,26 +111,23 @@ def one(path: Path, backend: str, jit: bool) -> dict[str, Any] | None:
         result = tr.solve(guess, p)
         solves.append(time.perf_counter() - t0)
         t0 = time.perf_counter()
-        timed(**arguments)
+        call()
         walls.append(time.perf_counter() - t0)
     for _ in range(REPEATS):
         t0 = time.perf_counter()
-        timed(**arguments)
+        iterations, success, total, seconds = breakdown()
         wall = time.perf_counter() - t0
-        stats = timed.stats()
-        its = max(int(stats["iter_count"]), 1)
-        evals = {name: float(stats.get(f"t_wall_{key}", 0.0)) / its * 1e3
-                 for key, name in EVALUATIONS.items()}
-        total = float(stats["t_wall_total"])
+        its = max(iterations, 1)
+        evals = {name: seconds[key] / its * 1e3 for key, name in EVALUATIONS.items()}
         rows.append({**evals, "solver": total / its * 1e3 - sum(evals.values()),
                      "python": (wall - total) / its * 1e3, "per_iteration": wall / its * 1e3,
-                     "iterations": int(stats["iter_count"]), "success": bool(stats["success"])})
+                     "iterations": iterations, "success": success})
     best = {k: statistics.median(r[k] for r in rows) for k in rows[0]
             if k not in ("success", "iterations")}
     own = result.backend == backend
     solve_ms = statistics.median(solves) * 1e3
     return {"problem": path.stem, "backend": backend, "evaluation": "jit" if jit else "vm",
-            "N": solver.disc.N,
+            "interface": "own" if direct is not None else "nlpsol", "N": solver.disc.N,
             "scheme": cfg.file.discretization.scheme, "iterations": rows[-1]["iterations"],
             "success": rows[-1]["success"], **best,
             "solve_ms": solve_ms if own else None,

@@ -117,6 +117,24 @@ def test_the_own_interface_solves_as_casadis_fatrop(name: str, scheme: str) -> N
             np.testing.assert_allclose(x, y, rtol=1e-12, atol=1e-12)
 
 
+@pytest.mark.parametrize("name,scheme", [("cart_pole", "order6"), ("so3_rest_to_rest", "order4")])
+def test_a_solve_reports_its_evaluations_as_casadi_counts_them(name: str, scheme: str) -> None:
+    """The driver's count of each Function's evaluations during fatrop's call is the count
+    CasADi's fatrop nlpsol keeps of the same solve (``n_call_*``), and their seconds are
+    positive and within the call's."""
+    tr, fb = fatrop(name, 8, scheme)
+    p = tr.pack()
+    a = fb.arguments(tr.point(tr.guesses(p)[0], p), p)
+    iterations = fb.direct.solve(a["x0"], a["p"], a["lbg"], a["ubg"], a["lbx"], a["ubx"])[1]
+    times = fb.direct.times
+    fb.solver(**a)
+    stats = fb.solver.stats()
+    assert iterations == stats["iter_count"]
+    assert times.calls == {name: stats[f"n_call_{name}"] for name in times.calls}
+    assert all(v > 0 for v in times.evaluations.values())
+    assert sum(times.evaluations.values()) < times.solve
+
+
 def test_a_reused_solver_reads_each_solves_bounds() -> None:
     """fatrop's solver is kept while the split of rows and bounds into equalities and
     inequalities stays; with other bounds of the same split, and with a split changed (a

@@ -11,11 +11,16 @@
  * Rows and variables are split per solve, as CasADi does: a row or variable with equal
  * bounds is an equality of its stage, one with a finite bound an inequality, a free one
  * neither. Gap rows read x_{k+1} - F_k(x_k, u_k) with coefficient +1 on x_{k+1}.
+ *
+ * A solve also reports where its time went: the seconds and calls of each Function's
+ * evaluations during fatrop's call, and the seconds of the call itself.
  */
+#define _POSIX_C_SOURCE 199309L /* clock_gettime */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include <blasfeo.h>
 #include "fatrop/ocp/OCPCInterface.h"
@@ -51,6 +56,9 @@ struct ocg_solve {
   const double *z0, *q, *lbz, *ubz, *lbg, *ubg;
   double *z, *g, *lam_g, *lam_x, *f;
   int iterations, return_flag, status, bad_structure;
+  double seconds[OCG_NFUN];      /* each Function's evaluations during fatrop's call */
+  int calls[OCG_NFUN];
+  double solve_seconds;          /* fatrop's call, evaluations included */
 };
 
 struct ocg_data {
@@ -60,6 +68,8 @@ struct ocg_data {
   int *a_eq, *a_ineq, *x_eq, *x_ineq, *a_eq_idx, *a_ineq_idx, *x_eq_idx, *x_ineq_idx;
   const double **arg;
   double **res;
+  double seconds[OCG_NFUN];      /* this solve's evaluations so far */
+  int calls[OCG_NFUN];
   cint *iw;
   double *w;
   struct FatropOcpCInterface ocp;
@@ -71,12 +81,22 @@ static const char *OCG_NAMES[OCG_NFUN] = {"nlp_f", "nlp_g", "nlp_grad_f", "nlp_j
 /* Evaluate Function i; a non-finite output is reported on stderr as CasADi's oracle reports
  * it ("NaN detected"), which the helper process counts, and the values are used as they are
  * (as CasADi's interface does: fatrop's line search backs off). */
+static double ocg_now(void) {
+  struct timespec t;
+  clock_gettime(CLOCK_MONOTONIC, &t);
+  return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
 static void ocg_call(struct ocg_data *d, int i, const double **in, int n_in, double **out,
                      const int *n_out, int n_res) {
   int j, k;
+  double t0;
   for (j = 0; j < n_in; ++j) d->arg[j] = in[j];
   for (j = 0; j < n_res; ++j) d->res[j] = out[j];
+  t0 = ocg_now();
   d->p->eval[i](d->arg, d->res, d->iw, d->w, 0);
+  d->seconds[i] += ocg_now() - t0;
+  ++d->calls[i];
   for (j = 0; j < n_res; ++j) {
     for (k = 0; k < n_out[j]; ++k) {
       if (!isfinite(out[j][k])) {
@@ -485,6 +505,7 @@ void ocg_fatrop_solve(struct ocg_context *c, struct ocg_solve *s) {
   const struct FatropOcpCDims *dims;
   const struct FatropOcpCStats *stats;
   const int one = 1;
+  double t0;
   d->s = s;
   memset(d->lam, 0, sizeof(double) * p->n_rows); /* rows without bounds keep multiplier 0 */
   ocg_split(d);
@@ -500,7 +521,13 @@ void ocg_fatrop_solve(struct ocg_context *c, struct ocg_solve *s) {
     ocg_options(p, c->solver);
     memcpy(c->previous, c->split, sizeof(int) * (size_t)c->n_split);
   }
+  memset(d->seconds, 0, sizeof d->seconds);
+  memset(d->calls, 0, sizeof d->calls);
+  t0 = ocg_now();
   s->status = fatrop_ocp_c_solve(c->solver);
+  s->solve_seconds = ocg_now() - t0;
+  memcpy(s->seconds, d->seconds, sizeof d->seconds);
+  memcpy(s->calls, d->calls, sizeof d->calls);
   primal = fatrop_ocp_c_get_primal(c->solver);
   dual = fatrop_ocp_c_get_dual(c->solver);
   dims = fatrop_ocp_c_get_dims(c->solver);

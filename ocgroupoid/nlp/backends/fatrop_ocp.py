@@ -62,7 +62,22 @@ class _Solve(ctypes.Structure):
 
     _fields_ = [*((name, ctypes.c_void_p) for name in SOLVE_ARRAYS),
                 ("iterations", ctypes.c_int), ("return_flag", ctypes.c_int),
-                ("status", ctypes.c_int), ("bad_structure", ctypes.c_int)]
+                ("status", ctypes.c_int), ("bad_structure", ctypes.c_int),
+                ("seconds", ctypes.c_double * len(NLP_FUNCTIONS)),
+                ("calls", ctypes.c_int * len(NLP_FUNCTIONS)), ("solve_seconds", ctypes.c_double)]
+
+
+@dataclass(frozen=True)
+class SolveTimes:
+    """Where one solve's time went, as the driver measured it: fatrop's call (``solve``,
+    evaluations included) and, per NLP Function (:data:`~ocgroupoid.nlp.jit.NLP_FUNCTIONS`),
+    the seconds and number of its evaluations during that call. The rest of the call is
+    fatrop's own: its Riccati factorisations and solves, its line search, and the
+    callbacks' copies of the stage blocks."""
+
+    solve: float
+    evaluations: dict[str, float]
+    calls: dict[str, int]
 
 
 class Unavailable(ConfigError):
@@ -219,6 +234,8 @@ class FatropOcp:
             raise MemoryError("fatrop's driver could not allocate its work memory")
         self._context = context
         weakref.finalize(self, self._lib.ocg_context_free, context)
+        #: the last solve's times (:class:`SolveTimes`), None before the first
+        self.times: SolveTimes | None = None
 
     def solve(self, z0: Any, q: Any, lbg: Any, ubg: Any, lbz: Any, ubz: Any
               ) -> tuple[dict[str, np.ndarray], int, int, int]:
@@ -232,6 +249,8 @@ class FatropOcp:
         out = {"x": x, "g": g, "lam_g": lam_g, "lam_x": lam_x, "f": f}
         s = _Solve(*(a.ctypes.data for a in (*inputs, x, g, lam_g, lam_x, f)))
         self._lib.ocg_fatrop_solve(self._context, ctypes.byref(s))
+        self.times = SolveTimes(s.solve_seconds, dict(zip(NLP_FUNCTIONS, s.seconds)),
+                                dict(zip(NLP_FUNCTIONS, s.calls)))
         if s.bad_structure:
             raise NotStaged("a gap row's coefficient on x_{k+1} is not 1")
         return out, s.iterations, s.return_flag, s.status
