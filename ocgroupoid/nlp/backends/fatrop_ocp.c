@@ -78,15 +78,16 @@ struct ocg_data {
 static const char *OCG_NAMES[OCG_NFUN] = {"nlp_f", "nlp_g", "nlp_grad_f", "nlp_jac_g",
                                           "nlp_hess_l"};
 
-/* Evaluate Function i; a non-finite output is reported on stderr as CasADi's oracle reports
- * it ("NaN detected"), which the helper process counts, and the values are used as they are
- * (as CasADi's interface does: fatrop's line search backs off). */
 static double ocg_now(void) {
   struct timespec t;
   clock_gettime(CLOCK_MONOTONIC, &t);
   return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
+/* Evaluate Function i, counting the call and its seconds; a non-finite output is reported
+ * on stderr as CasADi's oracle reports it ("NaN detected"), which the helper process counts,
+ * and the values are used as they are (as CasADi's interface does: fatrop's line search
+ * backs off). */
 static void ocg_call(struct ocg_data *d, int i, const double **in, int n_in, double **out,
                      const int *n_out, int n_res) {
   int j, k;
