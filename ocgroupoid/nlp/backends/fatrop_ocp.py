@@ -234,8 +234,17 @@ class FatropOcp:
             raise MemoryError("fatrop's driver could not allocate its work memory")
         self._context = context
         weakref.finalize(self, self._lib.ocg_context_free, context)
-        #: the last solve's times (:class:`SolveTimes`), None before the first
-        self.times: SolveTimes | None = None
+        self._last: _Solve | None = None
+
+    @property
+    def times(self) -> SolveTimes | None:
+        """The last solve's times (:class:`SolveTimes`), None before the first; read from
+        the driver's record of that solve when asked, not at every solve."""
+        s = self._last
+        if s is None:
+            return None
+        return SolveTimes(s.solve_seconds, dict(zip(NLP_FUNCTIONS, s.seconds)),
+                          dict(zip(NLP_FUNCTIONS, s.calls)))
 
     def solve(self, z0: Any, q: Any, lbg: Any, ubg: Any, lbz: Any, ubz: Any
               ) -> tuple[dict[str, np.ndarray], int, int, int]:
@@ -249,8 +258,7 @@ class FatropOcp:
         out = {"x": x, "g": g, "lam_g": lam_g, "lam_x": lam_x, "f": f}
         s = _Solve(*(a.ctypes.data for a in (*inputs, x, g, lam_g, lam_x, f)))
         self._lib.ocg_fatrop_solve(self._context, ctypes.byref(s))
-        self.times = SolveTimes(s.solve_seconds, dict(zip(NLP_FUNCTIONS, s.seconds)),
-                                dict(zip(NLP_FUNCTIONS, s.calls)))
+        self._last = s
         if s.bad_structure:
             raise NotStaged("a gap row's coefficient on x_{k+1} is not 1")
         return out, s.iterations, s.return_flag, s.status
