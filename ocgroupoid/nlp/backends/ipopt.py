@@ -52,6 +52,17 @@ DEFAULT_IPOPT: dict[str, Any] = {
     # problem file changes (order4 and order6, N = 16, 64, 256, from the first guess; the
     # cart-pole's four starts at N = 64; rk4_quat on the cart-pole)
     "max_soc": 10,
+    # a rank-deficient constraint Jacobian is regularised by 1e-6 mu^(1/4), not IPOPT's
+    # 1e-8 mu^(1/4). The plate-ball's first guess (a straight roll) is a singular point of
+    # its endpoint map: one direction of the final orientation is reached only through the
+    # Lie bracket of the rolling fields, so the linearised constraints lose rank there. At
+    # 1e-8 the first step solved a nearly singular KKT system (|d| ~ 1e5, iterative refinement
+    # failing) and its direction was decided by rounding: order4 at N = 64 took 88 iterations
+    # (64 of them restoring feasibility), or 35 with the Runge-Kutta matrix one ulp off; now
+    # 27 whatever the rounding, the same minima. From the first guess only the plate-ball
+    # changes at N = 16...128 (every file, order2/4/6) and quadrotor_min_time's order6 at
+    # N = 256 (71 -> 49 iterations), 2026-12-02: docs/benchmarks/performance.md
+    "jacobian_regularization_value": 1e-6,
     "print_level": 0,
     "sb": "yes",
 }
