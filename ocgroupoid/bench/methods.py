@@ -84,14 +84,16 @@ class Method:
                               rule=self.rule(file_rule), steps=steps)
 
     def options(self, ipopt: dict[str, Any], max_seconds: float = MAX_SECONDS,
-                N: int | None = None) -> SolverOptions:
+                N: int | None = None, fatrop: dict[str, Any] | None = None) -> SolverOptions:
         """The solver options of this method on N intervals: its backend and jit, IPOPT's
-        ``ipopt``, the wall time of one run, and for ``+coarse`` the continuation from
-        :meth:`coarse_N` (what a solve of the compiled problem does; the timed solves of
-        :mod:`~ocgroupoid.bench.timing` take the same two steps)."""
+        ``ipopt`` and fatrop's ``fatrop`` (the problem file's), the wall time of one run, and
+        for ``+coarse`` the continuation from :meth:`coarse_N` (what a solve of the compiled
+        problem does; the timed solves of :mod:`~ocgroupoid.bench.timing` take the same two
+        steps)."""
         n = None if N is None else self.coarse_N(N)
-        return SolverOptions(backend=self.backend, ipopt=dict(ipopt), jit=self.jit,
-                             max_seconds=max_seconds, continuation=() if n is None else (n,))
+        return SolverOptions(backend=self.backend, ipopt=dict(ipopt), fatrop=dict(fatrop or {}),
+                             jit=self.jit, max_seconds=max_seconds,
+                             continuation=() if n is None else (n,))
 
 
 #: ours (order2 with cayley and exp), then the baselines

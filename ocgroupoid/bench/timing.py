@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import statistics
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Any, Callable, TypeVar
 
 import numpy as np
@@ -49,24 +49,25 @@ Result = TypeVar("Result")
 
 @dataclass(frozen=True)
 class Setting:
-    """What a problem file fixes of every solve: IPOPT's options, order2's rule, the steps
-    and the wall time of one run (``solver.max_seconds``)."""
+    """What a problem file fixes of every solve: IPOPT's and fatrop's options, order2's
+    rule, the steps and the wall time of one run (``solver.max_seconds``)."""
 
     ipopt: dict[str, Any]
     rule: str
     steps: str = DEFAULT_STEPS
     max_seconds: float = MAX_SECONDS
+    fatrop: dict[str, Any] = field(default_factory=dict)
 
     @classmethod
     def of(cls, file: ProblemFile) -> "Setting":
         """The setting of a validated problem file."""
         return cls(dict(file.solver.ipopt), file.discretization.rule,
-                   file.discretization.steps, file.solver.max_seconds)
+                   file.discretization.steps, file.solver.max_seconds, dict(file.solver.fatrop))
 
     def compile(self, problem: Problem, method: Method, N: int) -> CompiledProblem:
         """``method`` compiled on N intervals in this setting."""
         return compile_problem(problem, method.on(N, self.rule, self.steps),
-                               method.options(self.ipopt, self.max_seconds, N))
+                               method.options(self.ipopt, self.max_seconds, N, self.fatrop))
 
 
 @dataclass

@@ -201,6 +201,7 @@ def work_precision(path: Path, overrides: list[str], out: Path, methods: list[Me
         "problem": name, "file": str(path), "overrides": overrides,
         "settings": {"N": Ns, "repeats": repeats, "reference_N": reference_N,
                      "methods": [m.label for m in methods], "ipopt": setting.ipopt,
+                     "fatrop": setting.fatrop,
                      "time": "median wall time of the repeats' solves from one cold start, "
                              "every method and N solved in turn in rounds: the start point, "
                              "the backend's arguments and helper round trip, the solve "

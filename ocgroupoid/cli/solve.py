@@ -92,7 +92,7 @@ def _solve_to_accuracy(problem: Any, f: Any, quiet: bool) -> Any:
             report=silent if quiet else lambda level: err.print(grid_line(level),
                                                                  highlight=False),
             jit=s.jit, backend=s.backend, max_seconds=s.max_seconds,
-            options=SolverOptions(workers=s.workers))
+            options=SolverOptions(workers=s.workers, fatrop=dict(s.fatrop)))
 
 
 def _solve_outputs(out_path: Optional[Path], plot_path: Optional[Path],

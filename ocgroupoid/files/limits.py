@@ -32,6 +32,7 @@ import casadi as ca
 from ..errors import ConfigError
 from ..lie.rn import Rn
 from ..model.problem import Problem
+from ..nlp.backends.fatrop_ocp import option_kinds
 
 BYTES_PER_VARIABLE = 16_000
 BYTES_PER_START = 4 * 8  # per variable and start: the guess, x, and the multipliers
@@ -249,3 +250,14 @@ def check_ipopt_options(ipopt: dict, where: Callable[..., str]) -> None:
         reason = ipopt_refuses(key, value, type(value).__name__)
         if reason:
             raise ConfigError(f"{at}: {reason}")
+
+
+def check_fatrop_options(fatrop: dict, where: Callable[..., str]) -> None:
+    """Refuse ``solver.fatrop`` options fatrop does not have, or whose values are not of their
+    option's kind, before anything is built; ``where(*key)`` locates a key for the message."""
+    for key, value in fatrop.items():
+        try:
+            option_kinds({key: value})
+        except ConfigError as err:
+            raise ConfigError(f"{where('solver', 'fatrop', key)}: solver.fatrop.{key}: "
+                              f"{err}") from None

@@ -88,6 +88,7 @@ def load(path: str | Path | None = None, overrides: list[str] | None = None,
                           f"must be coarser than horizon.N = {top.horizon.N}; lower or drop "
                           "them")
     limits.check_ipopt_options(top.solver.ipopt, locate)
+    limits.check_fatrop_options(top.solver.fatrop, locate)
     if top.model == "custom":
         if top.definition is None:
             raise ConfigError(f"{locate('model')}: model: custom needs a definition section "

@@ -202,6 +202,10 @@ class SolverSection(Strict):
 
     ipopt: dict[str, str | int | float] = Field(
         default_factory=dict, description="options passed to IPOPT (e.g. tol, max_iter)")
+    fatrop: dict[str, StrictBool | int | float | str] = Field(
+        default_factory=dict, description="fatrop's own options by fatrop's names (e.g. "
+        "acceptable_iter, tol_acceptable), over our defaults and the IPOPT options fatrop "
+        "shares, wherever fatrop runs (solver.backend: fatrop, or a benchmark's @fatrop)")
     multistart: Annotated[bool | int, BeforeValidator(_multistart)] = Field(
         True, description="true (the default), false (the first geodesic only), or the "
         "number of perturbed starts on top of the geodesics and the model's guesses "

@@ -37,8 +37,8 @@ def options(cfg: Config) -> SolverOptions:
     ``horizon.N: auto`` are the search's, :func:`~ocgroupoid.solve.accuracy.solve_to_accuracy`)."""
     s = cfg.file.solver
     try:
-        return SolverOptions(backend=s.backend, ipopt=dict(s.ipopt), jit=s.jit,
-                             max_seconds=s.max_seconds, multistart=s.multistart,
+        return SolverOptions(backend=s.backend, ipopt=dict(s.ipopt), fatrop=dict(s.fatrop),
+                             jit=s.jit, max_seconds=s.max_seconds, multistart=s.multistart,
                              continuation=tuple(s.continuation), workers=s.workers)
     except ConfigError as err:
         raise ConfigError(f"{cfg.locate('solver')}: {err}") from None

@@ -75,7 +75,8 @@ def mpc_command(
                      seed=seed, horizon="shrinking" if shrinking else "receding",
                      min_horizon=min_horizon, hessian=hessian,
                      retraction=d.retraction, rule=d.rule, scheme=d.scheme,
-                     ipopt=f.solver.ipopt, backend=f.solver.backend, progress=not quiet)
+                     ipopt=f.solver.ipopt, backend=f.solver.backend, fatrop=f.solver.fatrop,
+                     progress=not quiet)
         out_dir.mkdir(parents=True, exist_ok=True)
         result.to_json(out_dir / "mpc.json")
         result.plot(out_dir / "mpc.png")

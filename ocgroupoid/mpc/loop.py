@@ -108,6 +108,7 @@ def mpc(problem: Problem, N: int = 32, steps: int | None = None, *, rti: bool = 
         retraction: str = DEFAULT_RETRACTION, rule: str = DEFAULT_RULE,
         scheme: str = DEFAULT_SCHEME,
         ipopt: dict[str, Any] | None = None, backend: str = DEFAULT_BACKEND,
+        fatrop: dict[str, Any] | None = None,
         progress: bool | Callable[[int, int], None] = False) -> MpcResult:
     """Run ``problem`` in closed loop for ``steps`` samples (module docstring).
 
@@ -118,15 +119,17 @@ def mpc(problem: Problem, N: int = 32, steps: int | None = None, *, rti: bool = 
     ``noise``: the standard deviation of the velocity kicks after each sample; ``mismatch``:
     the plant's parameters scaled (``{"inertia": 1.05}``); ``seed``: the noise's generator.
     ``sample``: the sampling time (default T/N). ``progress``: a rich progress bar (True) or
-    a callback ``(done, total)``. Raises :class:`~ocgroupoid.errors.SolverError` when the
-    open-loop plan does not solve.
+    a callback ``(done, total)``. ``ipopt``, ``backend``, ``fatrop``: the solver options of
+    every solve (:class:`~ocgroupoid.nlp.options.SolverOptions`). Raises
+    :class:`~ocgroupoid.errors.SolverError` when the open-loop plan does not solve.
     """
     K = steps if steps is not None else (N if horizon == "shrinking" else 2 * N)
     _check(K, N, horizon, sample, min_horizon)
     check_fixed_horizon(problem)
     mismatch = dict(mismatch or {})
     solver = CompiledProblem(problem, Method(N, scheme=scheme, retraction=retraction, rule=rule),
-                    SolverOptions(backend=backend, ipopt=dict(ipopt or {})))
+                    SolverOptions(backend=backend, ipopt=dict(ipopt or {}),
+                                  fatrop=dict(fatrop or {})))
     tr = solver.transcription
     p = tr.pack()
     T = tr.horizon_of(p)

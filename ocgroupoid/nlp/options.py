@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, fields
-from numbers import Integral
+from numbers import Integral, Real
 from typing import Any
 
 from ..errors import ConfigError
@@ -53,6 +53,11 @@ class SolverOptions:
     #: IPOPT's options over :data:`~ocgroupoid.nlp.backends.ipopt.DEFAULT_IPOPT` (fatrop
     #: reads the ones it shares, and is given the rows scaled as ``nlp_scaling_*`` says)
     ipopt: dict[str, Any] = field(default_factory=dict)
+    #: fatrop's own options, by fatrop's names, over the ones it is given by default and
+    #: shares with IPOPT (:data:`~ocgroupoid.nlp.backends.fatrop.DEFAULT_FATROP`,
+    #: :data:`~ocgroupoid.nlp.backends.fatrop.ACCEPTABLE_STOP`), wherever fatrop runs (its
+    #: names and the kinds of their values are checked when the backend is built)
+    fatrop: dict[str, Any] = field(default_factory=dict)
     #: evaluate the NLP's Functions as compiled C (:mod:`~ocgroupoid.nlp.jit`)
     jit: bool = False
     #: the wall time of one solve, every start and grid together
@@ -75,6 +80,15 @@ class SolverOptions:
         if not isinstance(self.ipopt, dict) or not all(isinstance(k, str) for k in self.ipopt):
             raise ConfigError(f"ipopt options are a dict of option names and values, e.g. "
                               f"{{'tol': 1e-8}}, got {self.ipopt!r}")
+        if not isinstance(self.fatrop, dict) or not all(
+                isinstance(k, str) and isinstance(v, (bool, Real, str))
+                for k, v in self.fatrop.items()):
+            raise ConfigError(f"fatrop options are a dict of fatrop's option names and "
+                              f"numbers, booleans or strings, e.g. {{'acceptable_iter': 5}}, "
+                              f"got {self.fatrop!r}")
+        if self.fatrop:
+            from .backends.fatrop_ocp import option_kinds  # (it imports this module's users)
+            option_kinds(self.fatrop)
         if not isinstance(self.jit, bool):
             raise ConfigError(f"jit is True or False, got {self.jit!r}")
         multistart = self.multistart
@@ -95,6 +109,7 @@ class SolverOptions:
                               f"starts on: an integer >= 1 (1: one start after the other) or "
                               f"None (one per core), got {workers!r}")
         object.__setattr__(self, "ipopt", dict(self.ipopt))
+        object.__setattr__(self, "fatrop", dict(self.fatrop))
         object.__setattr__(self, "workers", None if workers is None else int(workers))
         object.__setattr__(self, "max_seconds", check_seconds(self.max_seconds))
         object.__setattr__(self, "continuation",

@@ -43,7 +43,7 @@ from ..jit import compiled
 from ..options import SolverOptions
 from ..stageform import NotStaged, StageForm, stage_form
 from .base import ACCEPTABLE, INTERRUPTED, TIMED_OUT, Backend, Graph, Run, Start
-from .fatrop_ocp import FatropOcp, Unavailable
+from .fatrop_ocp import FatropOcp, Unavailable, option_kinds
 from .ipopt import ipopt_options
 
 #: IPOPT options fatrop also has; the others do not apply to it
@@ -254,10 +254,19 @@ class FatropBackend(Backend):
         graph, functions = _functions(self.form, nlp.np, nlp.derivatives)
         #: the bounds fatrop is given, in stage form (:func:`tightened`)
         self.bounds = tightened(nlp.bounds_function, self.form)
-        self.max_iter = int(ipopt.get("max_iter", 3000))
+        # fatrop's options: ours, the IPOPT options it shares, then the solve's own
+        fatrop = {"print_level": 0, **DEFAULT_FATROP, **ACCEPTABLE_STOP,
+                  **{k: v for k, v in ipopt.items() if k in SHARED_OPTIONS},
+                  **{RENAMED_OPTIONS[k]: v for k, v in ipopt.items() if k in RENAMED_OPTIONS},
+                  **options.fatrop}
+        try:
+            option_kinds(fatrop)
+        except ConfigError as err:
+            raise ConfigError(f"fatrop's options (solver.fatrop and the IPOPT options fatrop "
+                              f"shares, {', '.join(SHARED_OPTIONS)}): {err}") from None
+        self.max_iter = int(fatrop.get("max_iter", 3000))
         #: the seconds after which a run counts as stuck (:data:`STUCK_SECONDS`)
         self.stuck_after = STUCK_FLOOR + STUCK_SECONDS * self.max_iter * nlp.nx
-        own = {"print_level": 0, **DEFAULT_FATROP, **ACCEPTABLE_STOP}
         self.jit_compiled = False
         #: ``beside`` compiled with fatrop's Functions (with jit and beside), else None
         self.compiled_beside: dict[str, ca.Function] | None = None
@@ -271,11 +280,7 @@ class FatropBackend(Backend):
         sf = self.form
         self.options: dict[str, Any]
         self.options = {"structure_detection": "manual", "N": sf.K, "nx": sf.nx, "nu": sf.nu,
-                        "ng": sf.ng, "cache": functions, "print_time": False,
-                        "fatrop": {**own,
-                                   **{k: v for k, v in ipopt.items() if k in SHARED_OPTIONS},
-                                   **{RENAMED_OPTIONS[k]: v for k, v in ipopt.items()
-                                      if k in RENAMED_OPTIONS}}}
+                        "ng": sf.ng, "cache": functions, "print_time": False, "fatrop": fatrop}
         #: the NLP in stage form, as nlpsol is given it
         self.nlp = graph
         self._name = name

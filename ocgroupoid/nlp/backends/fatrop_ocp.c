@@ -408,9 +408,6 @@ static void ocg_options(const struct ocg_problem *p, struct FatropOcpCSolver *so
   }
 }
 
-/* fatrop's kind of option (-1 unknown, 0 double, 1 int, 2 bool, 3 string) */
-int ocg_option_kind(const char *name) { return fatrop_ocp_c_option_type(name); }
-
 /* What persists between solves: the work memory and fatrop's solver, created anew only when
  * the split of rows and bounds into equalities and inequalities changes (its creation costs
  * 54 us at 5 stages of so3's size, 0.26 ms at 65, 1 ms at 257; CasADi's interface creates

@@ -31,9 +31,10 @@ from ..jit import NLP_FUNCTIONS, build, cache_dir
 from ..stageform import NotStaged, StageForm
 
 SOURCE = Path(__file__).with_name("fatrop_ocp.c")
-#: fatrop's kind of option for strings (``fatrop_ocp_c_option_type``: 0 double, 1 int,
-#: 2 bool, 3 string)
-STRING = 3
+#: fatrop's kinds of option (``fatrop_ocp_c_option_type``; -1 for a name it does not have)
+DOUBLE, INT, BOOL, STRING = 0, 1, 2, 3
+#: what a value of each kind is, for the message that rejects another
+KIND_NAMES = {DOUBLE: "a number", INT: "an integer", BOOL: "true or false", STRING: "a string"}
 _INT_P = ctypes.POINTER(ctypes.c_int)
 _DOUBLE_P = ctypes.POINTER(ctypes.c_double)
 _EVAL = ctypes.c_void_p
@@ -86,6 +87,49 @@ class Unavailable(ConfigError):
 
 
 @cache
+def _fatrop() -> ctypes.CDLL:
+    """fatrop's library as CasADi ships it (beside CasADi's own)."""
+    found = sorted(Path(ca.__file__).parent.glob("*fatrop.*"))
+    found = [f for f in found if f.name.startswith(("libfatrop.", "fatrop."))]
+    if not found:
+        raise ConfigError(f"fatrop's library is not in CasADi's folder "
+                          f"({Path(ca.__file__).parent}); use solver.backend: ipopt")
+    lib = ctypes.CDLL(str(found[0]))
+    lib.fatrop_ocp_c_option_type.argtypes = [ctypes.c_char_p]
+    lib.fatrop_ocp_c_option_type.restype = ctypes.c_int
+    return lib
+
+
+def option_kinds(options: dict[str, Any]) -> dict[str, int]:
+    """fatrop's kind of each option (:data:`DOUBLE`, :data:`INT`, :data:`BOOL`,
+    :data:`STRING`); ConfigError naming the names fatrop does not have and the values not of
+    their option's kind."""
+    kinds = {name: int(_fatrop().fatrop_ocp_c_option_type(name.encode())) for name in options}
+    unknown = [name for name, kind in kinds.items() if kind not in KIND_NAMES]
+    if unknown:
+        raise ConfigError(f"fatrop has no option {', '.join(unknown)} (fatrop's names, e.g. "
+                          f"acceptable_iter, tol_acceptable, kappa_wmin)")
+    wrong = [f"{name} is {KIND_NAMES[kind]}, got {options[name]!r}"
+             for name, kind in kinds.items() if not _of_kind(options[name], kind)]
+    if wrong:
+        raise ConfigError(f"fatrop's options: {'; '.join(wrong)}")
+    return kinds
+
+
+def _of_kind(value: Any, kind: int) -> bool:
+    """Whether ``value`` is one of fatrop's option kind ``kind``."""
+    if kind == STRING:
+        return isinstance(value, str)
+    if kind == BOOL:
+        return isinstance(value, (bool, np.bool_))
+    if isinstance(value, (bool, np.bool_)):
+        return False
+    if kind == INT:
+        return isinstance(value, (int, np.integer))
+    return isinstance(value, (int, float, np.integer, np.floating))
+
+
+@cache
 def driver() -> ctypes.CDLL:
     """The compiled driver (``fatrop_ocp.c``), built once per machine and CasADi version
     (0.3 s); :class:`Unavailable` when it does not compile."""
@@ -106,7 +150,6 @@ def driver() -> ctypes.CDLL:
     lib.ocg_context_free.argtypes = [ctypes.c_void_p]
     lib.ocg_fatrop_solve.argtypes = [ctypes.c_void_p, ctypes.POINTER(_Solve)]
     lib.ocg_fatrop_solve.restype = None
-    lib.ocg_option_kind.argtypes = [ctypes.c_char_p]
     return lib
 
 
@@ -197,10 +240,7 @@ class FatropOcp:
         self._lib = driver()
         self.library = library
         self._code = ctypes.CDLL(str(library))
-        kinds = {name: self._lib.ocg_option_kind(name.encode()) for name in options}
-        unknown = [name for name, kind in kinds.items() if kind < 0]
-        if unknown:
-            raise ConfigError(f"fatrop has no option {', '.join(unknown)}")
+        kinds = option_kinds(options)
         arrays = {name: _ints(v) for name, v in (
             ("nx", sf.nx), ("nu", sf.nu), ("ng", sf.ng), ("col", maps.col),
             ("row_ab", maps.row_ab), ("row_cd", maps.row_cd), ("ab_off", maps.ab_off),
@@ -208,7 +248,7 @@ class FatropOcp:
             ("a_index", maps.a_index), ("h_index", maps.h_index))}
         names = [name.encode() for name in options]
         strings = [str(v).encode() if kinds[k] == STRING else b"" for k, v in options.items()]
-        option_kinds = _ints([kinds[k] for k in options])
+        kind_array = _ints([kinds[k] for k in options])
         values = _doubles([0.0 if kinds[k] == STRING else float(v) for k, v in options.items()])
         p = _Problem()
         p.K, p.nz, p.n_rows = sf.K, sf.nz, self.n_rows
@@ -224,10 +264,10 @@ class FatropOcp:
         c_strings = (ctypes.c_char_p * len(strings))(*strings)
         p.n_options = len(options)
         p.option_names, p.option_strings = c_names, c_strings
-        p.option_kinds = _ptr(option_kinds, _INT_P)
+        p.option_kinds = _ptr(kind_array, _INT_P)
         p.option_values = _ptr(values, _DOUBLE_P)
         #: what the C struct points into, kept alive with it
-        self._keep = (arrays, option_kinds, values, c_names, c_strings)
+        self._keep = (arrays, kind_array, values, c_names, c_strings)
         self._problem = p
         context = self._lib.ocg_context_new(ctypes.byref(p))
         if not context:
