@@ -87,7 +87,7 @@ class SolverOptions:
                               f"numbers, booleans or strings, e.g. {{'acceptable_iter': 5}}, "
                               f"got {self.fatrop!r}")
         if self.fatrop:
-            from .backends.fatrop_ocp import option_kinds  # (it imports this module's users)
+            from .backends.fatrop_ocp import option_kinds  # here: the backends import this module
             option_kinds(self.fatrop)
         if not isinstance(self.jit, bool):
             raise ConfigError(f"jit is True or False, got {self.jit!r}")
