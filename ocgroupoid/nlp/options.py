@@ -56,7 +56,7 @@ class SolverOptions:
     #: fatrop's own options, by fatrop's names, over the ones it is given by default and
     #: shares with IPOPT (:data:`~ocgroupoid.nlp.backends.fatrop.DEFAULT_FATROP`,
     #: :data:`~ocgroupoid.nlp.backends.fatrop.ACCEPTABLE_STOP`), wherever fatrop runs (its
-    #: names and the kinds of their values are checked when the backend is built)
+    #: names and the kinds of their values are checked here, against fatrop's list)
     fatrop: dict[str, Any] = field(default_factory=dict)
     #: evaluate the NLP's Functions as compiled C (:mod:`~ocgroupoid.nlp.jit`)
     jit: bool = False

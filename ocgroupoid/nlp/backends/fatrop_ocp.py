@@ -89,11 +89,11 @@ class Unavailable(ConfigError):
 @cache
 def _fatrop() -> ctypes.CDLL:
     """fatrop's library as CasADi ships it (beside CasADi's own)."""
-    found = sorted(Path(ca.__file__).parent.glob("*fatrop.*"))
-    found = [f for f in found if f.name.startswith(("libfatrop.", "fatrop."))]
+    folder = Path(ca.__file__).parent
+    found = sorted([*folder.glob("libfatrop.*"), *folder.glob("fatrop.*")])
     if not found:
-        raise ConfigError(f"fatrop's library is not in CasADi's folder "
-                          f"({Path(ca.__file__).parent}); use solver.backend: ipopt")
+        raise ConfigError(f"fatrop's library is not in CasADi's folder ({folder}); use "
+                          f"solver.backend: ipopt")
     lib = ctypes.CDLL(str(found[0]))
     lib.fatrop_ocp_c_option_type.argtypes = [ctypes.c_char_p]
     lib.fatrop_ocp_c_option_type.restype = ctypes.c_int
