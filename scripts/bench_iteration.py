@@ -10,8 +10,8 @@ less those: the KKT factorisations and solves — MUMPS for IPOPT, fatrop's stag
 and its set-up in every call — and the method's own linear algebra), and the Python around
 the call (our wall time minus the solver's: CasADi's conversion of the numpy inputs and
 outputs, which the backends' own calls avoid, :mod:`~ocgroupoid.nlp.buffered`, and what of
-fatrop's set-up falls outside CasADi's timer). fatrop with ``jit`` runs as the backend runs
-it, through its own C interface in this process
+fatrop's set-up falls outside CasADi's timer). fatrop runs as the backend runs it (with
+``jit`` or without), through its own C interface in this process
 (:mod:`~ocgroupoid.nlp.backends.fatrop_ocp`), timed by its driver
 (:class:`~ocgroupoid.nlp.backends.fatrop_ocp.SolveTimes`): the evaluations during fatrop's
 call, fatrop's own (the call less those: its Riccati factorisations and solves, its line
@@ -80,7 +80,7 @@ def one(path: Path, backend: str, jit: bool) -> dict[str, Any] | None:
         lbg, ubg, lbx, ubx = runner.bounds(p)
         arguments = {"x0": x0, "p": p, "lbg": lbg, "ubg": ubg, "lbx": lbx, "ubx": ubx}
     direct = getattr(runner, "direct", None)
-    if direct is not None:  # fatrop with jit: its own C interface, in this process
+    if direct is not None:  # fatrop through its own C interface, in this process
         def breakdown() -> tuple[int, bool, float, dict[str, float]]:
             run = runner._solve_here((x0, p))
             times = direct.times

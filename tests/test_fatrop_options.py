@@ -1,6 +1,7 @@
 """solver.fatrop: fatrop's own options by fatrop's names, checked against fatrop's list
-when they are given, over our defaults and the IPOPT options fatrop shares, on both ways
-fatrop runs (CasADi's nlpsol; its own C interface with jit); and the cart-pole's, which
+when they are given, over our defaults and the IPOPT options fatrop shares, on every way
+fatrop runs (its own C interface, with jit or without; CasADi's nlpsol where the interface is
+unavailable); and the cart-pole's, which
 stops fatrop's crawl with order6 (its stage-wise factorisation calls the KKT system
 indefinite once the barrier parameter falls below 1e-8)."""
 
@@ -54,18 +55,22 @@ def fatrop_run(jit: bool, fatrop: dict) -> og.Transcription:
     return compile_problem(problem, method, options).transcription
 
 
-@pytest.mark.parametrize("jit", [False, True])
-def test_the_options_reach_fatrop_over_ours_and_ipopts(jit: bool, tmp_path: Path,
+@pytest.mark.parametrize("way", ["jit", "casadi", "nlpsol"])
+def test_the_options_reach_fatrop_over_ours_and_ipopts(way: str, tmp_path: Path,
                                                        monkeypatch) -> None:
     """fatrop's options over ours (the acceptable stop) and the IPOPT ones it shares
-    (max_iter): fatrop stops where they say, through nlpsol and through its own interface,
-    and a run it stops is still polished to IPOPT's minimum."""
-    if jit and shutil.which("cc") is None and shutil.which("gcc") is None:
+    (max_iter): fatrop stops where they say, through its own interface (the Functions
+    compiled, or evaluated by CasADi) and through CasADi's nlpsol, and a run it stops is
+    still polished to IPOPT's minimum."""
+    if way != "nlpsol" and shutil.which("cc") is None and shutil.which("gcc") is None:
         pytest.skip("no C compiler")
     monkeypatch.setenv("OCGROUPOID_JIT_CACHE", str(tmp_path))
+    jit = way == "jit"
     free = fatrop_run(jit, {})
     tr = fatrop_run(jit, {"max_iter": 2, "acceptable_iter": 3})
-    assert (tr.fatrop.direct is not None) == jit
+    assert tr.fatrop.direct is not None
+    if way == "nlpsol":  # as where the driver does not compile
+        free.fatrop.direct = tr.fatrop.direct = None
     opts = tr.fatrop.options["fatrop"]
     assert (opts["max_iter"], opts["acceptable_iter"]) == (2, 3)
     assert opts["tol_acceptable"] == ACCEPTABLE_STOP["tol_acceptable"]

@@ -8,10 +8,10 @@ same stage-wise assembly IPOPT gets (:func:`~ocgroupoid.nlp.assembly.assemble`),
 rows permuted into stage order and in the signatures fatrop asks for (the Hessian whole, not
 its upper triangle, with the gradient of the Lagrangian, both summed from the stages).
 
-With ``jit`` the compiled Functions drive fatrop through its own C interface
-(:mod:`~ocgroupoid.nlp.backends.fatrop_ocp`), the same solve to the last bit as CasADi's
-fatrop ``nlpsol``, whose build grows as N² (so3 at N = 1024: 2.6 s); without ``jit``, and for
-the exported C solver, CasADi's ``nlpsol`` runs it.
+The Functions (compiled with ``jit``, else evaluated by CasADi) drive fatrop through its own
+C interface (:mod:`~ocgroupoid.nlp.backends.fatrop_ocp`), the same solve to the last bit as
+CasADi's fatrop ``nlpsol``, whose build grows as N² (so3 at N = 1024: 3.3 s, against 0.1 s);
+CasADi's ``nlpsol`` runs it for the exported C solver, and where the driver does not compile.
 
 fatrop reads the IPOPT options it shares (:data:`SHARED_OPTIONS`, :data:`RENAMED_OPTIONS`)
 over its own (:data:`DEFAULT_FATROP`: no watchdog, more second-order corrections). It has no
@@ -284,14 +284,13 @@ class FatropBackend(Backend):
         #: the NLP in stage form, as nlpsol is given it
         self.nlp = graph
         self._name = name
-        #: with jit, fatrop driven through its own C interface (:mod:`.fatrop_ocp`: a build
-        #: linear in N); else CasADi's nlpsol (:attr:`solver`), built here
-        self.direct: FatropOcp | None = None
-        if library is not None:
-            try:
-                self.direct = FatropOcp(sf, functions, library, self.options["fatrop"])
-            except (NotStaged, Unavailable):
-                self.direct = None
+        #: fatrop driven through its own C interface (:mod:`.fatrop_ocp`: a build linear in
+        #: N); where it is unavailable, CasADi's nlpsol (:attr:`solver`), built here
+        self.direct: FatropOcp | None
+        try:
+            self.direct = FatropOcp(sf, functions, library, self.options["fatrop"])
+        except (NotStaged, Unavailable):
+            self.direct = None
         if self.direct is None:
             _ = self._whole
         self._isolated = Isolated(self._solve_here)
@@ -301,8 +300,9 @@ class FatropBackend(Backend):
 
     @cached_property
     def solver(self) -> ca.Function:
-        """CasADi's fatrop nlpsol on the stage form (its build grows as N²: without jit it
-        is built with the backend; with jit only if the exported solver needs it)."""
+        """CasADi's fatrop nlpsol on the stage form (its build grows as N²: built with the
+        backend only where fatrop's own interface is unavailable, else if the exported solver
+        needs it)."""
         try:
             return ca.nlpsol(self._name, "fatrop", self.nlp, self.options)
         except RuntimeError as err:

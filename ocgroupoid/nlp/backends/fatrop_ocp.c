@@ -1,5 +1,9 @@
 /* fatrop's own C interface (fatrop/ocp/OCPCInterface.h, shipped with CasADi) driven by the
- * stage form's compiled Functions: ocgroupoid/nlp/backends/fatrop_ocp.py builds the maps.
+ * stage form's Functions: ocgroupoid/nlp/backends/fatrop_ocp.py builds the maps. The
+ * Functions are compiled code (their entry points in eval and work), or, where eval[i] is
+ * NULL, CasADi's own evaluation of them: a FunctionBuffer each (casadi/core/function.hpp),
+ * its inputs and outputs bound to arrays of its own, evaluated by buffer_eval
+ * (casadi::_function_buffer_eval); the driver copies the arguments in and the results out.
  *
  * The callbacks are those of CasADi's fatrop interface (casadi/interfaces/fatrop/
  * fatrop_runtime.hpp): the five NLP Functions are evaluated whole, their Jacobian and
@@ -28,8 +32,10 @@
 typedef long long cint; /* CasADi's casadi_int in generated code */
 typedef int (*ocg_eval)(const double **arg, double **res, cint *iw, double *w, int mem);
 typedef int (*ocg_work)(cint *sz_arg, cint *sz_res, cint *sz_iw, cint *sz_w);
+typedef void (*ocg_buffer_eval)(void *buffer);
 
 enum { OCG_F, OCG_G, OCG_GRAD_F, OCG_JAC_G, OCG_HESS_L, OCG_NFUN };
+enum { OCG_MAX_IN = 4, OCG_MAX_OUT = 2 }; /* nlp_hess_l's inputs, nlp_jac_g's outputs */
 enum { OCG_AB = 0, OCG_CD = 1, OCG_EYE = 2 };
 
 /* The problem, constant over solves (filled by Python through ctypes). */
@@ -42,8 +48,12 @@ struct ocg_problem {
   int nz, n_rows, nnz_a, nnz_h, n_ab, n_cd, n_rsq;
   const int *a_kind, *a_index;   /* per Jacobian nonzero: block kind and index in it */
   const int *h_index;            /* per Hessian nonzero: index in RSQ, or -1 */
-  ocg_eval eval[OCG_NFUN];
+  ocg_eval eval[OCG_NFUN];       /* compiled code, or NULL: */
   ocg_work work[OCG_NFUN];
+  ocg_buffer_eval buffer_eval;   /* casadi::_function_buffer_eval */
+  void *buffer[OCG_NFUN];        /* each Function's FunctionBuffer, bound to: */
+  double *buffer_in[OCG_NFUN][OCG_MAX_IN], *buffer_out[OCG_NFUN][OCG_MAX_OUT];
+  int buffer_n_in[OCG_NFUN][OCG_MAX_IN]; /* the inputs' nonzeros */
   int n_options;
   const char **option_names;
   const int *option_kinds;       /* 0 double, 1 int, 2 bool, 3 string */
@@ -95,7 +105,15 @@ static void ocg_call(struct ocg_data *d, int i, const double **in, int n_in, dou
   for (j = 0; j < n_in; ++j) d->arg[j] = in[j];
   for (j = 0; j < n_res; ++j) d->res[j] = out[j];
   t0 = ocg_now();
-  d->p->eval[i](d->arg, d->res, d->iw, d->w, 0);
+  if (d->p->eval[i]) {
+    d->p->eval[i](d->arg, d->res, d->iw, d->w, 0);
+  } else {
+    for (j = 0; j < n_in; ++j)
+      memcpy(d->p->buffer_in[i][j], in[j], sizeof(double) * (size_t)d->p->buffer_n_in[i][j]);
+    d->p->buffer_eval(d->p->buffer[i]);
+    for (j = 0; j < n_res; ++j)
+      memcpy(out[j], d->p->buffer_out[i][j], sizeof(double) * (size_t)n_out[j]);
+  }
   d->seconds[i] += ocg_now() - t0;
   ++d->calls[i];
   for (j = 0; j < n_res; ++j) {
@@ -436,7 +454,8 @@ struct ocg_context *ocg_context_new(const struct ocg_problem *p) {
   if (!c) return NULL;
   d = &c->d;
   for (i = 0; i < OCG_NFUN; ++i) {
-    p->work[i](&a, &r, &iw, &w);
+    a = r = iw = w = 0; /* a FunctionBuffer holds its own work */
+    if (p->work[i]) p->work[i](&a, &r, &iw, &w);
     if (a > sz_arg) sz_arg = a;
     if (r > sz_res) sz_res = r;
     if (iw > sz_iw) sz_iw = iw;

@@ -2,26 +2,30 @@
 
 CasADi's fatrop ``nlpsol`` derives the stage blocks of the Jacobian and the Hessian from the
 NLP's sparsity as it is built, by assigning the blocks one at a time into a sparse matrix:
-its build grows as N² (so3 at N = 1024: 2.6 s, against IPOPT's 0.015 s). fatrop itself sets
-up in time linear in N (19 ms for 1024 stages of so3's size). With ``jit`` the stage form's
-five Functions are machine code in a library of their own, and :class:`FatropOcp` drives
-fatrop's C interface (``fatrop/ocp/OCPCInterface.h``, shipped with CasADi) with them: a small
-C driver (``fatrop_ocp.c``, the callbacks of CasADi's interface) scatters each nonzero of the
-Jacobian and the Hessian to its place in the dense stage blocks by an index computed here
-(:func:`block_maps`), one per nonzero. The driver is compiled once per machine into the
-:func:`~ocgroupoid.nlp.jit.cache_dir`. The solve is the one CasADi's interface runs: the
-same Functions, callbacks, splitting of rows and bounds, and options.
+its build grows as N² (so3 at N = 1024: 3.3 s, against IPOPT's 0.01 s). fatrop itself sets
+up in time linear in N (19 ms for 1024 stages of so3's size). :class:`FatropOcp` drives
+fatrop's C interface (``fatrop/ocp/OCPCInterface.h``, shipped with CasADi) with the stage
+form's five Functions: a small C driver (``fatrop_ocp.c``, the callbacks of CasADi's
+interface) scatters each nonzero of the Jacobian and the Hessian to its place in the dense
+stage blocks by an index computed here (:func:`block_maps`), one per nonzero. With ``jit``
+the Functions are machine code in a library of their own; without, CasADi evaluates them
+as it does for its own ``nlpsol``, each through a FunctionBuffer (:class:`Buffers`: no
+copy of the Functions, so the build stays linear in N). The driver is compiled once
+per machine into the :func:`~ocgroupoid.nlp.jit.cache_dir`. The solve is the one CasADi's
+interface runs: the same Functions, callbacks, splitting of rows and bounds, and options.
 """
 
 from __future__ import annotations
 
 import ctypes
 import hashlib
+import os
+import sys
 import weakref
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import casadi as ca
 import numpy as np
@@ -38,6 +42,8 @@ KIND_NAMES = {DOUBLE: "a number", INT: "an integer", BOOL: "true or false", STRI
 _INT_P = ctypes.POINTER(ctypes.c_int)
 _DOUBLE_P = ctypes.POINTER(ctypes.c_double)
 _EVAL = ctypes.c_void_p
+#: the most inputs and outputs of an NLP Function (nlp_hess_l's, nlp_jac_g's)
+MAX_IN, MAX_OUT = 4, 2
 #: the arrays of one solve: its inputs, then its outputs (``x`` is the driver's ``z``)
 SOLVE_ARRAYS = ("z0", "q", "lbz", "ubz", "lbg", "ubg", "z", "g", "lam_g", "lam_x", "f")
 
@@ -53,6 +59,10 @@ class _Problem(ctypes.Structure):
                 ("n_cd", ctypes.c_int), ("n_rsq", ctypes.c_int),
                 ("a_kind", _INT_P), ("a_index", _INT_P), ("h_index", _INT_P),
                 ("eval", _EVAL * len(NLP_FUNCTIONS)), ("work", _EVAL * len(NLP_FUNCTIONS)),
+                ("buffer_eval", _EVAL), ("buffer", _EVAL * len(NLP_FUNCTIONS)),
+                ("buffer_in", (_EVAL * MAX_IN) * len(NLP_FUNCTIONS)),
+                ("buffer_out", (_EVAL * MAX_OUT) * len(NLP_FUNCTIONS)),
+                ("buffer_n_in", (ctypes.c_int * MAX_IN) * len(NLP_FUNCTIONS)),
                 ("n_options", ctypes.c_int), ("option_names", ctypes.POINTER(ctypes.c_char_p)),
                 ("option_kinds", _INT_P), ("option_values", _DOUBLE_P),
                 ("option_strings", ctypes.POINTER(ctypes.c_char_p))]
@@ -153,6 +163,59 @@ def driver() -> ctypes.CDLL:
     return lib
 
 
+#: the C++ entry point of one FunctionBuffer evaluation (``casadi::_function_buffer_eval``,
+#: which ``Function.buffer()`` calls), as the Itanium C++ ABI names it
+BUFFER_EVAL = "_ZN6casadi21_function_buffer_evalEPv"
+
+
+@cache
+def buffer_eval() -> int:
+    """The address of CasADi's FunctionBuffer evaluation in the library this process's
+    ``casadi`` module runs on (looked up through the module's own extension: a wheel ships
+    the library twice, as copies under two names, and only one is the one loaded);
+    :class:`Unavailable` where it cannot be reached (another C++ ABI: Windows)."""
+    module = sys.modules.get("casadi._casadi")
+    try:
+        lib = ctypes.CDLL(str(getattr(module, "__file__", None)),
+                          mode=os.RTLD_NOLOAD | os.RTLD_LAZY)
+        address = ctypes.cast(getattr(lib, BUFFER_EVAL), ctypes.c_void_p).value
+    except (AttributeError, OSError) as err:
+        raise Unavailable(f"CasADi's FunctionBuffer is not reachable here ({err})") from None
+    if not address:
+        raise Unavailable("CasADi's FunctionBuffer is not reachable here")
+    return address
+
+
+class Buffers:
+    """A Function's FunctionBuffer (CasADi's evaluation on bound arrays, with work of its
+    own) with every input and output bound to an array of its own, for the driver: it copies
+    the arguments into :attr:`inputs`, evaluates, and copies the results from
+    :attr:`outputs`."""
+
+    def __init__(self, fn: ca.Function) -> None:
+        #: (typed loosely: CasADi's stubs ask a byte size its binding takes from the view)
+        self.buffer = cast(Any, fn.buffer()[0])
+        self.inputs = [np.zeros(max(fn.nnz_in(i), 1)) for i in range(fn.n_in())]
+        self.outputs = [np.zeros(max(fn.nnz_out(i), 1)) for i in range(fn.n_out())]
+        for i, a in enumerate(self.inputs):
+            self.buffer.set_arg(i, a.data)
+        for i, a in enumerate(self.outputs):
+            self.buffer.set_res(i, a.data)
+        self.sizes = [fn.nnz_in(i) for i in range(fn.n_in())]
+
+    @property
+    def address(self) -> int:
+        """The FunctionBuffer's address, which ``buffer_eval`` takes (from the capsule
+        ``_self()`` gives, as ``Function.buffer()`` passes it)."""
+        capsule = ctypes.py_object(self.buffer._self())
+        api = ctypes.pythonapi
+        api.PyCapsule_GetName.restype = ctypes.c_char_p
+        api.PyCapsule_GetName.argtypes = [ctypes.py_object]
+        api.PyCapsule_GetPointer.restype = ctypes.c_void_p
+        api.PyCapsule_GetPointer.argtypes = [ctypes.py_object, ctypes.c_char_p]
+        return int(api.PyCapsule_GetPointer(capsule, api.PyCapsule_GetName(capsule)))
+
+
 @dataclass(frozen=True)
 class BlockMaps:
     """Where each nonzero of the Jacobian and of the Hessian goes in the dense stage blocks:
@@ -222,11 +285,12 @@ def _ptr(a: np.ndarray, kind: Any) -> Any:
 
 
 class FatropOcp:
-    """fatrop on a stage form through its C interface, with the five compiled Functions of
-    ``library`` (their names :data:`~ocgroupoid.nlp.jit.NLP_FUNCTIONS`, as
-    ``functions`` describes them) and fatrop's ``options``; :meth:`solve` runs it."""
+    """fatrop on a stage form through its C interface, with the five Functions
+    ``functions`` (their names :data:`~ocgroupoid.nlp.jit.NLP_FUNCTIONS`): compiled into
+    ``library``, or evaluated by CasADi (:class:`Buffers`) without one; with fatrop's
+    ``options``. :meth:`solve` runs it."""
 
-    def __init__(self, sf: StageForm, functions: dict[str, ca.Function], library: Path,
+    def __init__(self, sf: StageForm, functions: dict[str, ca.Function], library: Path | None,
                  options: dict[str, Any]) -> None:
         jac = functions["nlp_jac_g"].sparsity_out(1)
         hess = functions["nlp_hess_l"].sparsity_out(1)
@@ -238,8 +302,8 @@ class FatropOcp:
         maps = block_maps(sf, jac, hess)
         self.form, self.n_rows = sf, sf.order.size
         self._lib = driver()
+        #: the compiled Functions' library, or None (CasADi evaluates them)
         self.library = library
-        self._code = ctypes.CDLL(str(library))
         kinds = option_kinds(options)
         arrays = {name: _ints(v) for name, v in (
             ("nx", sf.nx), ("nu", sf.nu), ("ng", sf.ng), ("col", maps.col),
@@ -257,9 +321,22 @@ class FatropOcp:
                                    (maps.ab_off, maps.cd_off, maps.rsq_off))
         for name, value in arrays.items():
             setattr(p, name, _ptr(value, _INT_P))
-        for i, name in enumerate(NLP_FUNCTIONS):
-            p.eval[i] = ctypes.cast(getattr(self._code, name), ctypes.c_void_p)
-            p.work[i] = ctypes.cast(getattr(self._code, f"{name}_work"), ctypes.c_void_p)
+        self._code = ctypes.CDLL(str(library)) if library is not None else None
+        if self._code is not None:
+            for i, name in enumerate(NLP_FUNCTIONS):
+                p.eval[i] = ctypes.cast(getattr(self._code, name), ctypes.c_void_p)
+                p.work[i] = ctypes.cast(getattr(self._code, f"{name}_work"), ctypes.c_void_p)
+        else:
+            #: CasADi's evaluation of the Functions (:class:`Buffers`), kept alive with p
+            self._buffers = [Buffers(functions[name]) for name in NLP_FUNCTIONS]
+            p.buffer_eval = buffer_eval()
+            for i, b in enumerate(self._buffers):
+                p.buffer[i] = b.address
+                for j, a in enumerate(b.inputs):
+                    p.buffer_in[i][j] = a.ctypes.data
+                    p.buffer_n_in[i][j] = b.sizes[j]
+                for j, a in enumerate(b.outputs):
+                    p.buffer_out[i][j] = a.ctypes.data
         c_names = (ctypes.c_char_p * len(names))(*names)
         c_strings = (ctypes.c_char_p * len(strings))(*strings)
         p.n_options = len(options)
