@@ -186,21 +186,28 @@ def test_an_option_fatrop_does_not_have_is_refused() -> None:
 
 
 
+@pytest.mark.parametrize("jit", [True, False], ids=["jit", "casadi"])
 def test_where_the_driver_does_not_compile_fatrop_runs_through_nlpsol(
-        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+        jit: bool, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """With the driver's compilation failing, fatrop runs through CasADi's nlpsol, with jit
+    or without, and the compilation is tried once, not again at every build."""
     from ocgroupoid.nlp.backends import fatrop_ocp
+    tries = []
 
     def no_headers(*args: object) -> None:
+        tries.append(args)
         raise ConfigError("fatrop/ocp/OCPCInterface.h: No such file or directory")
 
     monkeypatch.setenv("OCGROUPOID_JIT_CACHE", str(tmp_path))
     monkeypatch.setattr(fatrop_ocp, "build", no_headers)
-    fatrop_ocp.driver.cache_clear()
+    fatrop_ocp._driver.cache_clear()
     try:
         with pytest.raises(fatrop_ocp.Unavailable, match="No such file"):
             fatrop_ocp.driver()
-        tr, fb = fatrop("so3_rest_to_rest", 4)
-        p = tr.pack()
-        assert fb.direct is None and tr.solve(tr.guesses(p)[0], p).success
+        for _ in range(2):
+            tr, fb = fatrop("so3_rest_to_rest", 4, jit=jit)
+            p = tr.pack()
+            assert fb.direct is None and tr.solve(tr.guesses(p)[0], p).success
+        assert len(tries) == 1
     finally:
-        fatrop_ocp.driver.cache_clear()
+        fatrop_ocp._driver.cache_clear()

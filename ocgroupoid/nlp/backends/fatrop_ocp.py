@@ -139,10 +139,18 @@ def _of_kind(value: Any, kind: int) -> bool:
     return isinstance(value, (int, float, np.integer, np.floating))
 
 
-@cache
 def driver() -> ctypes.CDLL:
     """The compiled driver (``fatrop_ocp.c``), built once per machine and CasADi version
-    (0.3 s); :class:`Unavailable` when it does not compile."""
+    (0.3 s); :class:`Unavailable` when it does not compile (tried once per process)."""
+    lib = _driver()
+    if isinstance(lib, Unavailable):
+        raise lib
+    return lib
+
+
+@cache
+def _driver() -> ctypes.CDLL | Unavailable:
+    """:func:`driver`, or why it is unavailable."""
     casadi_dir = Path(ca.__file__).parent
     flags = ["-O2", "-shared", "-fPIC", f"-I{casadi_dir / 'include'}", f"-L{casadi_dir}",
              f"-Wl,-rpath,{casadi_dir}", "-lfatrop", "-lblasfeo", "-lm"]
@@ -153,7 +161,7 @@ def driver() -> ctypes.CDLL:
         try:
             build(SOURCE, path, flags)
         except ConfigError as err:
-            raise Unavailable(f"fatrop's own interface did not compile: {err}") from None
+            return Unavailable(f"fatrop's own interface did not compile: {err}")
     lib = ctypes.CDLL(str(path))
     lib.ocg_context_new.argtypes = [ctypes.POINTER(_Problem)]
     lib.ocg_context_new.restype = ctypes.c_void_p
@@ -161,6 +169,7 @@ def driver() -> ctypes.CDLL:
     lib.ocg_fatrop_solve.argtypes = [ctypes.c_void_p, ctypes.POINTER(_Solve)]
     lib.ocg_fatrop_solve.restype = None
     return lib
+
 
 
 #: the C++ entry point of one FunctionBuffer evaluation (``casadi::_function_buffer_eval``,
