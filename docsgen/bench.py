@@ -52,7 +52,8 @@ def headlines() -> str:
 
 def best_headlines() -> str:
     """The same for the best configurations (backends, jit), against rk4_quat with and
-    without compiled evaluation; landing against rk4_quat+jit at 1e-4, 1e-6 and 1e-8."""
+    without compiled evaluation; landing against rk4_quat+jit at 1e-4, 1e-6 and 1e-8; the
+    day each file's run was measured (files are run again one by one)."""
     d = _json("work_precision.json")
     rows = []
     for p, e in d.items():
@@ -63,10 +64,12 @@ def best_headlines() -> str:
         landing = best.get("landing_vs_jit", {})
         rows.append([f"`{p}`", _ratio(best["cost_error"]),
                      _ratio(jit.get("cost_error"), name=False), _ratio(best["replay_error"]),
-                     *(_ratio(landing.get(lv), name=False, level=False) for lv in LANDING_LEVELS)])
+                     *(_ratio(landing.get(lv), name=False, level=False) for lv in LANDING_LEVELS),
+                     str(best.get("created") or "")[:10]])
     return table(["problem", "cost: vs rk4_quat", "cost: vs rk4_quat+jit",
                   "landing: vs rk4_quat", *(f"landing {level.replace('e-0', 'e-')}: vs "
-                                            "rk4_quat+jit" for level in LANDING_LEVELS)], rows)
+                                            "rk4_quat+jit" for level in LANDING_LEVELS),
+                  "measured"], rows)
 
 
 def best_coarse_headlines() -> str:

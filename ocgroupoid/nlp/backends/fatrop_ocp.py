@@ -171,7 +171,6 @@ def _driver() -> ctypes.CDLL | Unavailable:
     return lib
 
 
-
 #: the C++ entry point of one FunctionBuffer evaluation (``casadi::_function_buffer_eval``,
 #: which ``Function.buffer()`` calls), as the Itanium C++ ABI names it
 BUFFER_EVAL = "_ZN6casadi21_function_buffer_evalEPv"
