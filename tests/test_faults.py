@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -95,14 +96,16 @@ def hanging_heavy_top(max_seconds: float, jit: bool = False
     """The heavy top with the first-order retraction on fatrop, and a start on which fatrop
     loops forever (once more NaN than :data:`~ocgroupoid.nlp.isolated.NAN_LIMIT` is let
     through); fatrop through its own C interface (``fatrop_ocp``), its Functions compiled
-    with ``jit``, else evaluated by CasADi."""
+    with ``jit``, else evaluated by CasADi (through CasADi's nlpsol where no C compiler
+    builds the interface)."""
     cfg = files.load(PROBLEMS / "heavy_top_rotors.yaml", [
         "discretization.retraction=first_order", "horizon.N=16", "solver.backend=fatrop"])
     f, d = cfg.file, cfg.file.discretization
     solver = og.compile_problem(files.build(cfg), 16, d.retraction, d.rule, f.solver.ipopt,
                                 d.scheme, backend="fatrop", max_seconds=max_seconds, jit=jit)
     tr = solver.transcription
-    assert tr.fatrop.direct is not None
+    compiler = any(shutil.which(c) for c in ("cc", "gcc", "clang"))
+    assert tr.fatrop.direct is not None or not compiler
     guess = next(g for g in solver.guesses(tr, tr.pack(), True)
                  if g.label == "great circle, long way")
     return solver, guess
