@@ -10,7 +10,7 @@ its upper triangle, with the gradient of the Lagrangian, both summed from the st
 
 The Functions (compiled with ``jit``, else evaluated by CasADi) drive fatrop through its own
 C interface (:mod:`~ocgroupoid.nlp.backends.fatrop_ocp`), the same solve to the last bit as
-CasADi's fatrop ``nlpsol``, whose build grows as N² (so3 at N = 1024: 3.3 s, against 0.1 s);
+CasADi's fatrop ``nlpsol``, whose build grows as N² (so3 at N = 1024: 2.4-3.3 s, against 0.34 s);
 CasADi's ``nlpsol`` runs it for the exported C solver, and where the driver does not compile.
 
 fatrop reads the IPOPT options it shares (:data:`SHARED_OPTIONS`, :data:`RENAMED_OPTIONS`)
