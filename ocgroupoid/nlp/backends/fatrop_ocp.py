@@ -215,13 +215,19 @@ class Buffers:
     def address(self) -> int:
         """The FunctionBuffer's address, which ``buffer_eval`` takes (from the capsule
         ``_self()`` gives, as ``Function.buffer()`` passes it)."""
-        capsule = ctypes.py_object(self.buffer._self())
-        api = ctypes.pythonapi
-        api.PyCapsule_GetName.restype = ctypes.c_char_p
-        api.PyCapsule_GetName.argtypes = [ctypes.py_object]
-        api.PyCapsule_GetPointer.restype = ctypes.c_void_p
-        api.PyCapsule_GetPointer.argtypes = [ctypes.py_object, ctypes.c_char_p]
-        return int(api.PyCapsule_GetPointer(capsule, api.PyCapsule_GetName(capsule)))
+        get_name, get_pointer = _capsule_api()
+        capsule = self.buffer._self()
+        return int(get_pointer(capsule, get_name(capsule)))
+
+
+@cache
+def _capsule_api() -> tuple[Any, Any]:
+    """Python's ``PyCapsule_GetName`` and ``PyCapsule_GetPointer``, typed once."""
+    get_name = ctypes.PYFUNCTYPE(ctypes.c_char_p, ctypes.py_object)(
+        ("PyCapsule_GetName", ctypes.pythonapi))
+    get_pointer = ctypes.PYFUNCTYPE(ctypes.c_void_p, ctypes.py_object, ctypes.c_char_p)(
+        ("PyCapsule_GetPointer", ctypes.pythonapi))
+    return get_name, get_pointer
 
 
 @dataclass(frozen=True)
