@@ -8,7 +8,7 @@ times after one solve not timed. Per cell the medians of: the whole call; the so
 (``Solution.solve_seconds``); the read-out and the checks of the verdict
 (``diagnostics["seconds"]``: the discrete Euler-Lagrange residual, the rank test of the
 equality rows, the replay through the continuous problem, the error estimate); the rest
-(starts, packing the parameters, the way to fatrop's helper and back). Writes
+(starts, packing the parameters, fatrop's guard or its helper's way there and back). Writes
 ``OUT/bench_checks.json`` and a chart of the shares, ``OUT/bench_checks.png`` (``--out``,
 default ``results/``); ``--quick``: so3 at N = 16, one solve.
 

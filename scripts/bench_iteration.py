@@ -22,10 +22,10 @@ median of :data:`REPEATS` solves per row.
 Beside it, per solve: the same start solved as a caller solves it
 (:meth:`~ocgroupoid.nlp.transcription.Transcription.solve`, the time the work-precision bench
 charts), and what that costs beyond the direct call (``outside``, ms per solve): the guess's
-start point, the backend's arguments and, for fatrop, the way to its helper process and back
-(:mod:`~ocgroupoid.nlp.isolated`), less the plain call's conversions, which the backends'
-buffered calls avoid; medians of :data:`PAIRS` of each in turn, after one solve not timed
-(fatrop's helper process starts at the first).
+start point, the backend's arguments and, for fatrop, its guard (in this process; or the way
+to its helper process and back, :mod:`~ocgroupoid.nlp.isolated`, where it has one), less the
+plain call's conversions, which the backends' buffered calls avoid; medians of :data:`PAIRS`
+of each in turn, after one solve not timed (a helper process starts at the first).
 Left empty where that solve is not the backend's own (a fallback).
 
 Writes ``bench_iteration.json`` and ``bench_iteration.png`` (stacked bars per file, backend
@@ -104,7 +104,7 @@ def one(path: Path, backend: str, jit: bool) -> dict[str, Any] | None:
                     {key: float(stats.get(f"t_wall_{key}", 0.0)) for key in EVALUATIONS})
     rows = []
     walls, solves = [], []
-    tr.solve(guess, p)  # not timed: fatrop's helper process starts at the first solve
+    tr.solve(guess, p)  # not timed: a helper process starts at the first solve
     for _ in range(PAIRS):  # the caller's solve and the direct call in turn
         t0 = time.perf_counter()
         result = tr.solve(guess, p)

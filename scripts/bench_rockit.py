@@ -7,7 +7,7 @@ Both solve ``problems/so3_rest_to_rest.yaml`` (the rigid body's rest-to-rest sle
   (``order6@fatrop+jit``), from the first geodesic guess; its time is the wall time of one
   solve of the built NLP (:func:`~ocgroupoid.bench.timing.timed_solve`: the median of repeated
   solves from the same cold start, each from its guess's start point to the answer read back,
-  fatrop's helper round trip included; the build not timed);
+  fatrop's guard, or its helper's round trip, included; the build not timed);
 * **rockit**: the same problem written as a rockit user writes it — unit quaternion and body
   rates as states (the model of ``bench_mpc.py``), ``MultipleShooting(N=N, M=1,
   intg="rk")`` (one RK4 step per interval, piecewise-constant controls), IPOPT with

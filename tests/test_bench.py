@@ -214,29 +214,29 @@ def test_median_seconds_times_every_call_and_keeps_the_last_result() -> None:
 def test_a_timed_solve_counts_what_its_caller_waits_for(backend: str,
                                                          monkeypatch: pytest.MonkeyPatch) -> None:
     """A work-precision row's time is the wall time of the whole solve of the built NLP: the
-    guess's start point and, for fatrop, the way to its helper process and back, with the
-    solve (the solver's own time alone left out 0.9-2.4 ms of fatrop's 3-13 ms on so3); and
-    a fatrop run reports the caller's wait as its seconds. Each step is slowed by 50 ms here:
-    the times must contain the delays."""
+    guess's start point and, for fatrop, the way into its guarded solve (or to its helper
+    process) and back, with the solve (the solver's own time alone left out 0.9-2.4 ms of
+    fatrop's 3-13 ms on so3); and a fatrop run reports the caller's wait as its seconds.
+    Each step is slowed by 50 ms here: the times must contain the delays."""
     import time
 
     from ocgroupoid.bench.methods import Method
     from ocgroupoid.bench.timing import Setting, timed_solve
-    from ocgroupoid.nlp.isolated import Isolated
+    from ocgroupoid.nlp.backends.fatrop import FatropBackend
     from ocgroupoid.nlp.transcription import Transcription
     delay = 0.05
-    start_point, call = Transcription.start_point, Isolated.call
+    start_point, solve_here = Transcription.start_point, FatropBackend._solve_here
 
     def slow_start(self: Transcription, *args: object) -> object:
         time.sleep(delay)
         return start_point(self, *args)  # type: ignore[arg-type]
 
-    def slow_call(self: Isolated, *args: object, **kwargs: object) -> object:
+    def slow_solve(self: FatropBackend, *args: object, **kwargs: object) -> object:
         time.sleep(delay)
-        return call(self, *args, **kwargs)  # type: ignore[arg-type]
+        return solve_here(self, *args, **kwargs)  # type: ignore[arg-type]
 
     monkeypatch.setattr(Transcription, "start_point", slow_start)
-    monkeypatch.setattr(Isolated, "call", slow_call)
+    monkeypatch.setattr(FatropBackend, "_solve_here", slow_solve)
     cfg = files.load(SO3)
     timed = timed_solve(files.build(cfg), Method("order4", backend=backend), 8,
                         Setting.of(cfg.file), repeats=2)

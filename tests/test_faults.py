@@ -91,13 +91,18 @@ def test_the_first_order_plate_ball_on_fatrop_returns(tmp_path: Path) -> None:
     assert "NaN detected" not in r.stderr and seconds < 30
 
 
-def hanging_heavy_top(max_seconds: float, jit: bool = False
+#: where fatrop runs: guarded in the caller's process (``fatrop_guard.c``), or in the helper
+WHERE = pytest.mark.parametrize("guarded", [True, False], ids=["in-process", "helper"])
+
+
+def hanging_heavy_top(max_seconds: float, jit: bool = False, guarded: bool = True
                       ) -> tuple[og.CompiledProblem, og.Guess]:
     """The heavy top with the first-order retraction on fatrop, and a start on which fatrop
     loops forever (once more NaN than :data:`~ocgroupoid.nlp.isolated.NAN_LIMIT` is let
     through); fatrop through its own C interface (``fatrop_ocp``), its Functions compiled
     with ``jit``, else evaluated by CasADi (through CasADi's nlpsol where no C compiler
-    builds the interface)."""
+    builds the interface); guarded in this process where it can be (Linux), or in the
+    helper process."""
     cfg = files.load(PROBLEMS / "heavy_top_rotors.yaml", [
         "discretization.retraction=first_order", "horizon.N=16", "solver.backend=fatrop"])
     f, d = cfg.file, cfg.file.discretization
@@ -106,30 +111,46 @@ def hanging_heavy_top(max_seconds: float, jit: bool = False
     tr = solver.transcription
     compiler = any(shutil.which(c) for c in ("cc", "gcc", "clang"))
     assert tr.fatrop.direct is not None or not compiler
+    assert tr.fatrop.guarded == (tr.fatrop.direct is not None and sys.platform == "linux")
+    tr.fatrop.guarded &= guarded
     guess = next(g for g in solver.guesses(tr, tr.pack(), True)
                  if g.label == "great circle, long way")
     return solver, guess
 
 
-def test_fatrop_stops_at_the_time_limit(monkeypatch) -> None:
+def ran_where(solver: og.CompiledProblem, guarded: bool) -> None:
+    """fatrop ran where it was meant to: guarded in this process (its driver kept the
+    solve's record here), or in the helper (the record stayed in the helper)."""
+    fatrop = solver.transcription.fatrop
+    assert fatrop is not None
+    if fatrop.direct is None:  # no C compiler: CasADi's nlpsol, in the helper
+        return
+    assert (fatrop.direct.times is not None) == fatrop.guarded
+    assert fatrop.guarded or not guarded or sys.platform != "linux"
+
+
+@WHERE
+def test_fatrop_stops_at_the_time_limit(monkeypatch, guarded: bool) -> None:
     monkeypatch.setattr(isolated, "NAN_LIMIT", 10 ** 9)  # only the deadline is left
-    solver, guess = hanging_heavy_top(max_seconds=2.0)
+    solver, guess = hanging_heavy_top(max_seconds=2.0, guarded=guarded)
     t0 = time.perf_counter()
     sol = solver.solve(guess=guess, replay=False)
     assert time.perf_counter() - t0 < 15
     assert sol.status == "Maximum_WallTime_Exceeded" and not sol.success
     assert "solver.max_seconds" in sol.hint and sol.backend == "fatrop"
+    ran_where(solver, guarded)
 
 
+@WHERE
 def test_a_stuck_fatrop_run_fails_before_the_deadline_and_ipopt_solves_the_start(
-        monkeypatch) -> None:
+        monkeypatch, guarded: bool) -> None:
     """A fatrop run longer than its iterations can take (``stuck_after``) is stuck: it fails
     there, not at the deadline, and IPOPT solves the start with the time left."""
     from ocgroupoid.nlp.backends import fatrop
     monkeypatch.setattr(isolated, "NAN_LIMIT", 10 ** 9)  # only the time is left to stop it
     monkeypatch.setattr(fatrop, "STUCK_FLOOR", 0.5)
     monkeypatch.setattr(fatrop, "STUCK_SECONDS", 1e-6)
-    solver, guess = hanging_heavy_top(max_seconds=60.0)
+    solver, guess = hanging_heavy_top(max_seconds=60.0, guarded=guarded)
     tr = solver.transcription
     assert tr.fatrop is not None
     assert tr.fatrop.stuck_after == pytest.approx(0.5 + 1e-6 * tr.fatrop.max_iter * tr.nx)
@@ -138,25 +159,32 @@ def test_a_stuck_fatrop_run_fails_before_the_deadline_and_ipopt_solves_the_start
     assert time.perf_counter() - t0 < 30
     assert r.backend == "ipopt after fatrop" and r.status != "Maximum_WallTime_Exceeded"
     assert r.earlier[0][:2] == ("fatrop", fatrop.FAILED)
+    ran_where(solver, guarded)
 
 
-@pytest.mark.parametrize("jit", [False, True], ids=["nlpsol", "own-interface"])
-def test_fatrop_stops_on_repeated_nan_and_ipopt_solves_the_start(jit: bool) -> None:
-    solver, guess = hanging_heavy_top(max_seconds=60.0, jit=jit)
+@WHERE
+@pytest.mark.parametrize("jit", [False, True], ids=["vm", "jit"])
+def test_fatrop_stops_on_repeated_nan_and_ipopt_solves_the_start(jit: bool, guarded: bool
+                                                                 ) -> None:
+    solver, guess = hanging_heavy_top(max_seconds=60.0, jit=jit, guarded=guarded)
     t0 = time.perf_counter()
     r = solver.transcription.solve(guess, solver.transcription.pack())
     assert time.perf_counter() - t0 < 10
     assert r.backend == "ipopt after fatrop" and r.status != "Maximum_WallTime_Exceeded"
-    assert solver.transcription.fatrop._isolated.nans >= isolated.NAN_LIMIT
+    assert r.earlier[0][:2] == ("fatrop", "Fatrop_Failed")
+    assert solver.transcription.fatrop.nans >= isolated.NAN_LIMIT
+    ran_where(solver, guarded)
 
 
-def test_ctrl_c_stops_fatrop_at_once(monkeypatch) -> None:
+@WHERE
+def test_ctrl_c_stops_fatrop_at_once(monkeypatch, guarded: bool) -> None:
     monkeypatch.setattr(isolated, "NAN_LIMIT", 10 ** 9)
-    solver, guess = hanging_heavy_top(max_seconds=60.0)
+    solver, guess = hanging_heavy_top(max_seconds=60.0, guarded=guarded)
     t0 = time.perf_counter()
     with sigint_after(1.0):
         sol = solver.solve(guess=guess, replay=False)
     assert sol.status == "interrupted" and time.perf_counter() - t0 < 10
+    ran_where(solver, guarded)
 
 
 @pytest.mark.parametrize("backend", ["ipopt", "fatrop"])

@@ -11,10 +11,10 @@ when the coarse grid failed), and its time is both's. The solves run back to bac
 the work-precision benchmark does).
 A run's time is what the caller of the built NLP waits for
 (:meth:`~ocgroupoid.nlp.transcription.Transcription.solve`, the wall time around it): the
-start point of the guess, the backend's arguments and, for fatrop, the way to its helper
-process and back, with the solve itself; the solver's own time alone left out 0.9-2.4 ms of
-fatrop's 3-13 ms on so3 at N = 16...128 (IPOPT's 0.8-1.2 ms). The last run is read out and
-diagnosed as
+start point of the guess, the backend's arguments and, for fatrop, its guard (or the way to
+its helper process and back, where it has one), with the solve itself; the solver's own
+time alone left out 0.9-2.4 ms of fatrop's 3-13 ms on so3 at N = 16...128 (IPOPT's 0.8-1.2
+ms), when fatrop ran in its helper. The last run is read out and diagnosed as
 :meth:`~ocgroupoid.solve.CompiledProblem.solve` does (replay, verdict, hint).
 
 Each run is held to the problem file's ``solver.max_seconds`` (IPOPT's ``max_wall_time``,

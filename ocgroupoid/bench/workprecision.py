@@ -204,7 +204,8 @@ def work_precision(path: Path, overrides: list[str], out: Path, methods: list[Me
                      "fatrop": setting.fatrop,
                      "time": "median wall time of the repeats' solves from one cold start, "
                              "every method and N solved in turn in rounds: the start point, "
-                             "the backend's arguments and helper round trip, the solve "
+                             "the backend's arguments (and fatrop's helper round trip, where "
+                             "it has one), the solve "
                              "(build, diagnostics and replay not included)"},
         "reference": ref, "skipped": skipped,
         "other_minimum": {"cost_error": OTHER_COST, "path_deviation": OTHER_PATH},

@@ -3,10 +3,11 @@
 fatrop (the build CasADi ships) has no time limit and no iteration callback, and it carries
 on when a function it evaluates fails or returns NaN; its inertia correction then loops
 without bound when the KKT matrix stays singular (``plate_ball.yaml`` with the first-order
-retraction at N = 16: the "long way round" start ran for more than 600 s). A loop inside a
-C++ library cannot be left from the same process, so :class:`Isolated` runs such work in a
-helper process forked from this one, which holds the same compiled objects: forked at the
-first call, it serves every later one. A call costs the way there and back: 0.26 ms with an
+retraction at N = 16: the "long way round" start ran for more than 600 s). Through fatrop's
+own interface on Linux its driver leaves such a loop itself (``fatrop_guard.c``); elsewhere,
+and for CasADi's fatrop ``nlpsol``, :class:`Isolated` runs the work in a helper process
+forked from this one, which holds the same compiled objects: forked at the first call, it
+serves every later one. A call costs the way there and back: 0.26 ms with an
 empty task, 0.6-0.9 ms around a fatrop solve of so3 at N = 32 and 128 (2-core virtual
 machine; the wait itself costs, not the data).
 The caller waits for the answer until its deadline, reads what the helper prints on stderr

@@ -90,7 +90,8 @@ class Transcription(NonlinearProgram):
         With IPOPT, ``listener(iteration, objective, infeasibility)`` hears every iteration
         and stops IPOPT by returning True (status ``User_Requested_Stop``), a guess with
         multipliers as well, which is a primal-dual warm start. fatrop has neither: it starts
-        from the guess's primal point, in a helper process that is stopped at ``deadline``
+        from the guess's primal point, guarded (in this process, or in a helper process where
+        it cannot be: :mod:`~ocgroupoid.nlp.backends.fatrop`) and stopped at ``deadline``
         (``time.monotonic()``; default: :attr:`max_seconds` from now), after repeated NaN
         evaluations, or once ``stop()`` is true; when it fails IPOPT solves from the same
         start with the time left (:func:`~ocgroupoid.nlp.backends.policy.in_turn`), after

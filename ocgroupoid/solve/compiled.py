@@ -81,8 +81,9 @@ def _listener(where: str, progress: Progress, interrupt: Interrupt,
 
 
 def _over(interrupt: Interrupt, budget: parallel.Budget | None) -> Callable[[], bool]:
-    """Whether a run should stop for fatrop's helper, which has no iteration callback: Ctrl-C
-    was pressed, or the seconds of a further start's ``budget`` (from now) are spent."""
+    """Whether a fatrop run, which has no iteration callback, should stop (asked by its guard
+    or its helper): Ctrl-C was pressed, or the seconds of a further start's ``budget`` (from
+    now) are spent."""
     began = time.perf_counter()
     return lambda: interrupt.requested or \
         (budget is not None and time.perf_counter() - began >= budget.seconds)
@@ -124,8 +125,8 @@ class CompiledProblem:
     :func:`~ocgroupoid.nlp.shortcuts.choose`).
 
     ``max_seconds`` bounds the wall time of one :meth:`solve` (every start and grid): a start
-    past it is stopped (IPOPT at its next iteration, fatrop's helper process at once,
-    :mod:`~ocgroupoid.nlp.isolated`) with status ``Maximum_WallTime_Exceeded``, the starts
+    past it is stopped (IPOPT at its next iteration, fatrop at once by its guard,
+    :mod:`~ocgroupoid.nlp.backends.fatrop`) with status ``Maximum_WallTime_Exceeded``, the starts
     left are skipped, and the best point so far is returned.
 
     >>> solver = compile_problem(problem, N=64)            # doctest: +SKIP

@@ -12,9 +12,9 @@ alternatives cost more and cover less: serialising IPOPT's nlpsol Function took 
 11 MB through a pipe and 0.13 s to deserialise, and the iteration callback (a Python object)
 has to be rebuilt beside it; rebuilding the transcription from the problem took 0.34 s, and a
 problem holding CasADi SX expressions or Python hooks does not pickle in general. A worker's
-copy of a fatrop backend forks its own helper (:mod:`~ocgroupoid.nlp.isolated`). Only the
-start (its guess and the parameters) goes to a worker and only its
-:class:`~ocgroupoid.nlp.transcription.RawResult` comes back.
+copy of a fatrop backend forks its own helper where it needs one
+(:mod:`~ocgroupoid.nlp.isolated`). Only the start (its guess and the parameters) goes to a
+worker and only its :class:`~ocgroupoid.nlp.transcription.RawResult` comes back.
 
 **The same result as one start after the other.** Starts are handed out in their order and
 reported in it, whatever order they finish in. The iteration budget of a further start
@@ -179,9 +179,9 @@ class _Shared:
 
 
 def _over(i: int, shared: _Shared, began: float, waited: list[float]) -> Callable[[], bool]:
-    """Whether start i's run should stop for fatrop's helper (which has no iteration
-    callback): the stop event, or the seconds of a further start's budget spent (the seconds
-    it waited at the smallest budget not counted)."""
+    """Whether start i's fatrop run (which has no iteration callback) should stop, asked by its
+    guard or its helper: the stop event, or the seconds of a further start's budget spent (the
+    seconds it waited at the smallest budget not counted)."""
     def over() -> bool:
         if shared.stop.is_set():
             return True

@@ -19,7 +19,7 @@
  * A solve also reports where its time went: the seconds and calls of each Function's
  * evaluations during fatrop's call, and the seconds of the call itself.
  */
-#define _POSIX_C_SOURCE 199309L /* clock_gettime */
+#define _GNU_SOURCE /* clock_gettime; and sigsetjmp, timers (fatrop_guard.h) */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -28,6 +28,7 @@
 
 #include <blasfeo.h>
 #include "fatrop/ocp/OCPCInterface.h"
+#include "fatrop_guard.h"
 
 typedef long long cint; /* CasADi's casadi_int in generated code */
 typedef int (*ocg_eval)(const double **arg, double **res, cint *iw, double *w, int mem);
@@ -69,6 +70,12 @@ struct ocg_solve {
   double seconds[OCG_NFUN];      /* each Function's evaluations during fatrop's call */
   int calls[OCG_NFUN];
   double solve_seconds;          /* fatrop's call, evaluations included */
+  /* a guarded solve (fatrop_guard.c): left after `limit` seconds, at the `nan_limit`-th
+   * non-finite evaluation, on Ctrl-C (watch_sigint) or when check() says stop (asked every
+   * `every` seconds); `left` says why (OCG_LEFT_*), `nans` counts the evaluations */
+  int guarded, nan_limit, watch_sigint, left, nans;
+  double limit, every;
+  int (*check)(void);
 };
 
 struct ocg_data {
@@ -82,6 +89,7 @@ struct ocg_data {
   int calls[OCG_NFUN];
   cint *iw;
   double *w;
+  struct ocg_guard *guard;       /* this solve's guard, or NULL: unguarded */
   struct FatropOcpCInterface ocp;
 };
 
@@ -94,14 +102,16 @@ static double ocg_now(void) {
   return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
-/* Evaluate Function i, counting the call and its seconds; a non-finite output is reported
- * on stderr as CasADi's oracle reports it ("NaN detected"), which the helper process counts,
- * and the values are used as they are (as CasADi's interface does: fatrop's line search
- * backs off). */
+/* Evaluate Function i, counting the call and its seconds; a non-finite output is counted by
+ * the guard (a guarded solve), else reported on stderr as CasADi's oracle reports it ("NaN
+ * detected"), which the helper process counts; the values are used as they are (as CasADi's
+ * interface does: fatrop's line search backs off). A guarded solve may be left here, before
+ * the evaluation (ocg_guard_poll) or after it (ocg_guard_nan). */
 static void ocg_call(struct ocg_data *d, int i, const double **in, int n_in, double **out,
                      const int *n_out, int n_res) {
   int j, k;
   double t0;
+  ocg_guard_poll(d->guard);
   for (j = 0; j < n_in; ++j) d->arg[j] = in[j];
   for (j = 0; j < n_res; ++j) d->res[j] = out[j];
   t0 = ocg_now();
@@ -119,8 +129,9 @@ static void ocg_call(struct ocg_data *d, int i, const double **in, int n_in, dou
   for (j = 0; j < n_res; ++j) {
     for (k = 0; k < n_out[j]; ++k) {
       if (!isfinite(out[j][k])) {
-        fprintf(stderr, "NaN detected for output %d of %s, at nonzero %d.\n", j,
-                OCG_NAMES[i], k);
+        if (d->guard) ocg_guard_nan(d->guard);
+        else fprintf(stderr, "NaN detected for output %d of %s, at nonzero %d.\n", j,
+                     OCG_NAMES[i], k);
         break;
       }
     }
@@ -432,6 +443,7 @@ static void ocg_options(const struct ocg_problem *p, struct FatropOcpCSolver *so
  * one for every solve). */
 struct ocg_context {
   struct ocg_data d;
+  struct ocg_guard guard;
   struct FatropOcpCSolver *solver;
   int *split, *previous; /* the split's index arrays, this solve's and the solver's */
   int n_split;
@@ -513,7 +525,9 @@ struct ocg_context *ocg_context_new(const struct ocg_problem *p) {
   return c;
 }
 
-/* One solve from s->z0 (s->status: fatrop's return value, 0 when it converged). */
+/* One solve from s->z0 (s->status: fatrop's return value, 0 when it converged), guarded if
+ * s->guarded (s->left: why it was left; -1 when the guard could not be armed, and nothing
+ * was solved). */
 void ocg_fatrop_solve(struct ocg_context *c, struct ocg_solve *s) {
   struct ocg_data *d = &c->d;
   const struct ocg_problem *p = d->p;
@@ -540,9 +554,37 @@ void ocg_fatrop_solve(struct ocg_context *c, struct ocg_solve *s) {
   }
   memset(d->seconds, 0, sizeof d->seconds);
   memset(d->calls, 0, sizeof d->calls);
+  s->left = OCG_LEFT_NONE;
+  d->guard = NULL;
+  if (s->guarded) {
+    c->guard.every = s->every;
+    c->guard.check = s->check;
+    c->guard.nan_limit = s->nan_limit;
+    if (sigsetjmp(c->guard.env, 1)) { /* left: fatrop's solver is abandoned, never freed */
+      ocg_guard_disarm(&c->guard);
+      c->d.guard = NULL;
+      c->solver = NULL;
+      s->left = c->guard.reason;
+      s->nans = c->guard.nans;
+      s->status = s->return_flag = -1;
+      s->iterations = 0;
+      memcpy(s->z, s->z0, sizeof(double) * c->d.p->nz);
+      return;
+    }
+    if (!ocg_guard_arm(&c->guard, s->limit, s->watch_sigint)) {
+      s->left = -1; /* no timer: the caller solves unguarded */
+      return;
+    }
+    d->guard = &c->guard;
+  }
   t0 = ocg_now();
   s->status = fatrop_ocp_c_solve(c->solver);
   s->solve_seconds = ocg_now() - t0;
+  if (d->guard) {
+    ocg_guard_disarm(d->guard);
+    s->nans = d->guard->nans;
+    d->guard = NULL;
+  }
   memcpy(s->seconds, d->seconds, sizeof d->seconds);
   memcpy(s->calls, d->calls, sizeof d->calls);
   primal = fatrop_ocp_c_get_primal(c->solver);

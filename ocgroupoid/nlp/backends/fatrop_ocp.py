@@ -19,22 +19,27 @@ from __future__ import annotations
 
 import ctypes
 import hashlib
+import math
 import os
 import sys
+import threading
 import weakref
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
-from typing import Any, cast
+from typing import Any, Callable, cast
 
 import casadi as ca
 import numpy as np
 
 from ...errors import ConfigError
+from ..isolated import Stopped
 from ..jit import NLP_FUNCTIONS, build, cache_dir
 from ..stageform import NotStaged, StageForm
 
 SOURCE = Path(__file__).with_name("fatrop_ocp.c")
+#: the guard of a solve in the caller's process, compiled with the driver
+GUARD = (Path(__file__).with_name("fatrop_guard.c"), Path(__file__).with_name("fatrop_guard.h"))
 #: fatrop's kinds of option (``fatrop_ocp_c_option_type``; -1 for a name it does not have)
 DOUBLE, INT, BOOL, STRING = 0, 1, 2, 3
 #: what a value of each kind is, for the message that rejects another
@@ -42,6 +47,8 @@ KIND_NAMES = {DOUBLE: "a number", INT: "an integer", BOOL: "true or false", STRI
 _INT_P = ctypes.POINTER(ctypes.c_int)
 _DOUBLE_P = ctypes.POINTER(ctypes.c_double)
 _EVAL = ctypes.c_void_p
+#: the caller's stop request, asked by a guarded solve (nonzero: stop)
+_CHECK = ctypes.CFUNCTYPE(ctypes.c_int)
 #: the most inputs and outputs of an NLP Function (nlp_hess_l's, nlp_jac_g's)
 MAX_IN, MAX_OUT = 4, 2
 #: the arrays of one solve: its inputs, then its outputs (``x`` is the driver's ``z``)
@@ -75,7 +82,15 @@ class _Solve(ctypes.Structure):
                 ("iterations", ctypes.c_int), ("return_flag", ctypes.c_int),
                 ("status", ctypes.c_int), ("bad_structure", ctypes.c_int),
                 ("seconds", ctypes.c_double * len(NLP_FUNCTIONS)),
-                ("calls", ctypes.c_int * len(NLP_FUNCTIONS)), ("solve_seconds", ctypes.c_double)]
+                ("calls", ctypes.c_int * len(NLP_FUNCTIONS)), ("solve_seconds", ctypes.c_double),
+                ("guarded", ctypes.c_int), ("nan_limit", ctypes.c_int),
+                ("watch_sigint", ctypes.c_int), ("left", ctypes.c_int), ("nans", ctypes.c_int),
+                ("limit", ctypes.c_double), ("every", ctypes.c_double), ("check", _CHECK)]
+
+
+#: why a guarded solve was left (``ocg_solve.left``, fatrop_guard.h), as
+#: :class:`~ocgroupoid.nlp.isolated.Stopped` names it
+LEFT = {1: "time", 2: "nan", 3: "stop"}
 
 
 @dataclass(frozen=True)
@@ -89,6 +104,22 @@ class SolveTimes:
     solve: float
     evaluations: dict[str, float]
     calls: dict[str, int]
+
+
+def _never() -> bool:
+    return False
+
+
+@dataclass(frozen=True)
+class Guard:
+    """How a solve in the caller's process is left (``fatrop_guard.c``): after ``seconds``, at
+    the ``nan_limit``-th non-finite evaluation, on Ctrl-C (in the main thread), or once
+    ``stop()`` is true, asked from fatrop's evaluations at most every ``every`` seconds."""
+
+    seconds: float
+    stop: Callable[[], bool]
+    nan_limit: int
+    every: float
 
 
 class Unavailable(ConfigError):
@@ -152,9 +183,10 @@ def driver() -> ctypes.CDLL:
 def _driver() -> ctypes.CDLL | Unavailable:
     """:func:`driver`, or why it is unavailable."""
     casadi_dir = Path(ca.__file__).parent
-    flags = ["-O2", "-shared", "-fPIC", f"-I{casadi_dir / 'include'}", f"-L{casadi_dir}",
-             f"-Wl,-rpath,{casadi_dir}", "-lfatrop", "-lblasfeo", "-lm"]
-    source = SOURCE.read_bytes()
+    flags = [str(GUARD[0]), "-O2", "-shared", "-fPIC", f"-I{casadi_dir / 'include'}",
+             f"-I{SOURCE.parent}", f"-L{casadi_dir}", f"-Wl,-rpath,{casadi_dir}", "-lfatrop",
+             "-lblasfeo", "-lrt", "-lm"]
+    source = b"".join(path.read_bytes() for path in (SOURCE, *GUARD))
     digest = hashlib.sha256(source + " ".join(flags).encode() + ca.CasadiMeta.version().encode())
     path = cache_dir() / f"ocg_fatrop_{digest.hexdigest()[:24]}.so"
     if not path.exists():
@@ -168,6 +200,7 @@ def _driver() -> ctypes.CDLL | Unavailable:
     lib.ocg_context_free.argtypes = [ctypes.c_void_p]
     lib.ocg_fatrop_solve.argtypes = [ctypes.c_void_p, ctypes.POINTER(_Solve)]
     lib.ocg_fatrop_solve.restype = None
+    lib.ocg_guard_available.restype = ctypes.c_int
     return lib
 
 
@@ -316,6 +349,9 @@ class FatropOcp:
         maps = block_maps(sf, jac, hess)
         self.form, self.n_rows = sf, sf.order.size
         self._lib = driver()
+        #: whether its solves can be guarded in the caller's process (``fatrop_guard.c``:
+        #: Linux on x86-64 or AArch64, with a real-time signal free for its timer)
+        self.guardable = bool(self._lib.ocg_guard_available())
         #: the compiled Functions' library, or None (CasADi evaluates them)
         self.library = library
         kinds = option_kinds(options)
@@ -366,6 +402,22 @@ class FatropOcp:
         self._context = context
         weakref.finalize(self, self._lib.ocg_context_free, context)
         self._last: _Solve | None = None
+        #: the stop request of the guarded solve under way, asked through :attr:`_check`
+        self._stop: Callable[[], bool] = _never
+        self._raised: list[BaseException] = []
+        self._check = _CHECK(self._ask)
+        self._lock = threading.Lock()
+        #: the non-finite evaluations of the last guarded solve
+        self.nans = 0
+
+    def _ask(self) -> int:
+        """The guarded solve's question to its caller: stop? (An exception, such as
+        KeyboardInterrupt on a second Ctrl-C, stops it and is raised once it has returned.)"""
+        try:
+            return int(bool(self._stop()))
+        except BaseException as err:  # noqa: BLE001  (raised again by solve)
+            self._raised.append(err)
+            return 1
 
     @property
     def times(self) -> SolveTimes | None:
@@ -377,19 +429,40 @@ class FatropOcp:
         return SolveTimes(s.solve_seconds, dict(zip(NLP_FUNCTIONS, s.seconds)),
                           dict(zip(NLP_FUNCTIONS, s.calls)))
 
-    def solve(self, z0: Any, q: Any, lbg: Any, ubg: Any, lbz: Any, ubz: Any
-              ) -> tuple[dict[str, np.ndarray], int, int, int]:
+    def solve(self, z0: Any, q: Any, lbg: Any, ubg: Any, lbz: Any, ubz: Any,
+              guard: Guard | None = None) -> tuple[dict[str, np.ndarray], int, int, int] | Stopped:
         """fatrop from z0 with parameters q and the stage form's bounds: the solution
         ``x, f, g, lam_g, lam_x`` (stage form, scaled as the Functions are), its
-        iterations, fatrop's return flag and its return value (0: converged)."""
+        iterations, fatrop's return flag and its return value (0: converged). With a
+        ``guard`` (where :attr:`guardable`), :class:`~ocgroupoid.nlp.isolated.Stopped` when it
+        was left (:class:`Guard`), fatrop's solver abandoned; :class:`Unavailable` when the
+        guard's timer could not be created."""
         inputs = [_doubles(v) for v in (z0, q, lbz, ubz, lbg, ubg)]
         nz, n_rows = self.form.nz, self.n_rows
         x, g, lam_g, lam_x, f = np.split(np.zeros(2 * nz + 2 * n_rows + 1),
                                          np.cumsum([nz, n_rows, n_rows, nz]))
         out = {"x": x, "g": g, "lam_g": lam_g, "lam_x": lam_x, "f": f}
         s = _Solve(*(a.ctypes.data for a in (*inputs, x, g, lam_g, lam_x, f)))
-        self._lib.ocg_fatrop_solve(self._context, ctypes.byref(s))
-        self._last = s
+        with self._lock:  # one solve at a time: the driver's memory and solver are shared
+            if guard is not None:
+                s.guarded, s.every = 1, guard.every
+                s.nan_limit = min(guard.nan_limit, 2**31 - 1)
+                s.limit = guard.seconds if math.isfinite(guard.seconds) else 7 * 86400.0
+                s.watch_sigint = threading.current_thread() is threading.main_thread()
+                s.check = self._check
+                self._stop = guard.stop
+            try:
+                self._lib.ocg_fatrop_solve(self._context, ctypes.byref(s))
+            finally:
+                self._stop = _never
+            raised, self._raised = self._raised, []
+            self._last, self.nans = s, s.nans
+        if raised:
+            raise raised[0]
+        if s.left < 0:
+            raise Unavailable("fatrop's guard could not create its timer")
+        if s.left:
+            return Stopped(LEFT[s.left])
         if s.bad_structure:
             raise NotStaged("a gap row's coefficient on x_{k+1} is not 1")
         return out, s.iterations, s.return_flag, s.status
