@@ -36,7 +36,7 @@ PROBLEMS = ROOT / "problems"
 FILES = ("so3_rest_to_rest", "custom_rigid_body", "free_flyer", "so3_minimum_time",
          "quadrotor", "cart_pole")
 NS = (4, 8, 16, 64)
-ROUNDS = 21
+ROUNDS = 61
 QUICK = (("so3_rest_to_rest",), (4,), 3)
 
 

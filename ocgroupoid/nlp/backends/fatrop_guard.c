@@ -35,7 +35,6 @@ void ocg_guard_poll(struct ocg_guard *g) { (void)g; }
 void ocg_guard_nan(struct ocg_guard *g) { (void)g; }
 #else
 
-#include <dlfcn.h>
 #include <link.h>
 #include <pthread.h>
 #include <stdint.h>
