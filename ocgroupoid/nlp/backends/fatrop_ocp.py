@@ -36,6 +36,7 @@ from ...errors import ConfigError
 from ..isolated import Stopped
 from ..jit import NLP_FUNCTIONS, build, cache_dir
 from ..stageform import NotStaged, StageForm
+from .base import never
 
 SOURCE = Path(__file__).with_name("fatrop_ocp.c")
 #: the guard of a solve in the caller's process, compiled with the driver
@@ -104,10 +105,6 @@ class SolveTimes:
     solve: float
     evaluations: dict[str, float]
     calls: dict[str, int]
-
-
-def _never() -> bool:
-    return False
 
 
 @dataclass(frozen=True)
@@ -403,7 +400,7 @@ class FatropOcp:
         weakref.finalize(self, self._lib.ocg_context_free, context)
         self._last: _Solve | None = None
         #: the stop request of the guarded solve under way, asked through :attr:`_check`
-        self._stop: Callable[[], bool] = _never
+        self._stop: Callable[[], bool] = never
         self._raised: list[BaseException] = []
         self._check = _CHECK(self._ask)
         self._lock = threading.Lock()
@@ -454,7 +451,7 @@ class FatropOcp:
             try:
                 self._lib.ocg_fatrop_solve(self._context, ctypes.byref(s))
             finally:
-                self._stop = _never
+                self._stop = never
             raised, self._raised = self._raised, []
             self._last, self.nans = s, s.nans
         if raised:
