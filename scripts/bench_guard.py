@@ -86,6 +86,8 @@ def chart(rows: list[dict[str, Any]], path: Path) -> None:
         ax.loglog(Ns, [r["helper_ms"] for r in mine], "s--", label="helper process")
         ax.set_title(name, fontsize=9)
         ax.set_xlabel("N")
+        ax.set_xticks(Ns, [str(N) for N in Ns])
+        ax.xaxis.set_minor_locator(plt.NullLocator())
         ax.grid(True, which="both", alpha=0.3)
     axes[0][0].set_ylabel("median solve (ms)")
     axes[0][0].legend(fontsize=8)
