@@ -55,12 +55,6 @@ static uintptr_t ocg_lo[OCG_RANGES], ocg_hi[OCG_RANGES]; /* code where a jump ma
 static int ocg_n_ranges, ocg_signal, ocg_ready = -1;     /* -1: not looked at yet */
 static volatile sig_atomic_t ocg_sigint_seen;
 
-static double ocg_clock(void) {
-  struct timespec t;
-  clock_gettime(CLOCK_MONOTONIC, &t);
-  return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
-
 /* the executable segments of the object holding `address` */
 static int ocg_add_object(struct dl_phdr_info *info, size_t size, void *address) {
   int i, found = 0;
@@ -121,7 +115,7 @@ static void ocg_on_timer(int sig, siginfo_t *info, void *context) {
   (void)sig;
   if (info->si_code != SI_TIMER || !g || !g->armed) return;
   if (ocg_sigint_seen && g->sigint) g->reason = OCG_LEFT_STOP;
-  else if (ocg_clock() >= g->deadline) g->reason = OCG_LEFT_TIME;
+  else if (ocg_now() >= g->deadline) g->reason = OCG_LEFT_TIME;
   else return;
   if (!ocg_jumpable(ocg_pc(context))) {
     ocg_retry_soon(g);
@@ -178,7 +172,7 @@ int ocg_guard_arm(struct ocg_guard *g, double seconds, int watch_sigint) {
   struct itimerspec t;
   struct sigaction action;
   sigset_t only;
-  double now = ocg_clock(), tick = g->every > 1e-3 ? g->every : 1e-3;
+  double now = ocg_now(), tick = g->every > 1e-3 ? g->every : 1e-3;
   double first = seconds < tick ? seconds : tick;
   if (ocg_guard_available() != 1) return 0;
   memset(&event, 0, sizeof event);
@@ -243,7 +237,7 @@ void ocg_guard_poll(struct ocg_guard *g) {
   double now;
   if (!g || !g->armed) return;
   if (g->sigint && ocg_sigint_seen) ocg_leave(g, OCG_LEFT_STOP);
-  now = ocg_clock();
+  now = ocg_now();
   if (now >= g->deadline) ocg_leave(g, OCG_LEFT_TIME);
   if (g->check && now >= g->next_check) {
     g->next_check = now + g->every;

@@ -26,6 +26,7 @@ struct ocg_guard {
   struct sigaction previous_sigint;
 };
 
+double ocg_now(void); /* CLOCK_MONOTONIC seconds (fatrop_ocp.c) */
 int ocg_guard_available(void);
 int ocg_guard_arm(struct ocg_guard *g, double seconds, int watch_sigint);
 void ocg_guard_disarm(struct ocg_guard *g);

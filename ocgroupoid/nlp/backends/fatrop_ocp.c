@@ -96,7 +96,7 @@ struct ocg_data {
 static const char *OCG_NAMES[OCG_NFUN] = {"nlp_f", "nlp_g", "nlp_grad_f", "nlp_jac_g",
                                           "nlp_hess_l"};
 
-static double ocg_now(void) {
+double ocg_now(void) {
   struct timespec t;
   clock_gettime(CLOCK_MONOTONIC, &t);
   return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
