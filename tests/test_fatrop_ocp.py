@@ -168,6 +168,24 @@ def test_a_reused_solver_reads_each_solves_bounds() -> None:
     assert reused[2][3] == 0 and reused[2][0]["g"][j] == pytest.approx(fixed_lb[j], abs=1e-8)
 
 
+def test_a_solves_result_is_its_own_and_its_inputs_are_checked() -> None:
+    """The driver's arrays are allocated once and reused: a solve's result is not changed by
+    the next solve, and an input of the wrong length is refused (not read past its end)."""
+    tr, fb = fatrop("cart_pole", 8, "order4")
+    p = tr.pack()
+    a = fb.arguments(tr.point(tr.guesses(p)[0], p), p)
+    first = fb.direct.solve(a["x0"], a["p"], a["lbg"], a["ubg"], a["lbx"], a["ubx"])[0]
+    kept = {k: v.copy() for k, v in first.items()}
+    tight = [np.where(np.isfinite(a[k]), 0.8 * np.asarray(a[k]), a[k])
+             for k in ("lbg", "ubg", "lbx", "ubx")]
+    second = fb.direct.solve(a["x0"], a["p"], *tight)[0]
+    assert second["f"] != first["f"]  # the tightened bounds bind: other numbers were written
+    for key in first:
+        np.testing.assert_array_equal(first[key], kept[key])
+    with pytest.raises(ValueError, match=f"expects {np.size(a['x0'])} numbers, got 3"):
+        fb.direct.solve(np.zeros(3), a["p"], a["lbg"], a["ubg"], a["lbx"], a["ubx"])
+
+
 @pytest.mark.parametrize("jit", [True, False], ids=["jit", "casadi"])
 def test_no_nlpsol_is_built(jit: bool) -> None:
     """The N² of CasADi's fatrop interface is in building its nlpsol: with jit or without,

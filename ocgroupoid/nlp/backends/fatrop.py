@@ -239,6 +239,10 @@ def _functions(sf: StageForm, np_: int, derivatives: Derivatives
     return {"x": z, "p": q, "f": s_f * fns["f"], "g": s * g}, functions
 
 
+#: the solver's inputs (:meth:`FatropBackend.arguments`), as nlpsol names them
+ARGUMENTS = ("x0", "p", "lbg", "ubg", "lbx", "ubx")
+
+
 class FatropBackend(Backend):
     """The fatrop instance of a block NLP over ``w = [x; p]``, solved in the original
     variables: points, bounds and multipliers are mapped in and out (:class:`StageForm`);
@@ -304,7 +308,10 @@ class FatropBackend(Backend):
         #: the non-finite evaluations of the last run
         self.nans = 0
         self._isolated = Isolated(self._solve_here)
-        self._bounds, self._scales = Buffered(self.bounds), Buffered(self.scales)
+        x0, p = ca.MX.sym("x0", sf.z_slot.size), ca.MX.sym("p", self.bounds.size1_in(0))
+        #: :meth:`arguments` of numbers as one call (0.04 ms a solve less than its steps)
+        self._arguments = Buffered(ca.Function(f"{name}_arguments", [x0, p], list(
+            self.arguments(x0, p).values()), ["x0", "p"], [f"{a}_out" for a in ARGUMENTS]))
         #: the time the build took (stage form, Functions, jit, nlpsol or the driver's maps)
         self.build_seconds = time.perf_counter() - t0
 
@@ -334,17 +341,12 @@ class FatropBackend(Backend):
         """The solver's inputs in stage form, for an original point x0 and parameters p (numbers,
         or graphs for the exported solver; every copy starts at its variable): its parameters
         are ``[p; s; s_f]``, with the scales at x0 (:func:`_scales`)."""
+        if not isinstance(p, ca.MX):
+            return dict(zip(ARGUMENTS, self._arguments(x0=x0, p=p).values()))
         z0 = self.form.z_of(x0)
-        if isinstance(p, ca.MX):
-            scales = self.scales(z0, p)
-            bounds: Any = self.bounds(p, scales[0])
-            q: Any = ca.vertcat(p, *scales)
-        else:
-            s, s_f = self._scales(x=z0, p=p).values()
-            bounds = self._bounds(p=p, s=s).values()
-            q = np.concatenate([np.ravel(p), s, s_f])
-        lbg, ubg, lbz, ubz = bounds
-        return {"x0": z0, "p": q, "lbg": lbg, "ubg": ubg, "lbx": lbz, "ubx": ubz}
+        scales = self.scales(z0, p)
+        lbg, ubg, lbz, ubz = self.bounds(p, scales[0])
+        return dict(zip(ARGUMENTS, (z0, ca.vertcat(p, *scales), lbg, ubg, lbz, ubz)))
 
     def _solve_graph(self, solver: ca.Function, x0: ca.MX, p: ca.MX) -> dict[str, ca.MX]:
         """``solver`` (fatrop on the stage form) from the original point x0 with parameters p,

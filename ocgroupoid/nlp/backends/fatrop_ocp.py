@@ -324,6 +324,14 @@ def _doubles(a: Any) -> np.ndarray:
     return np.ascontiguousarray(np.ravel(a), dtype=float)
 
 
+def _fill(array: np.ndarray, value: Any) -> None:
+    """Copy the numbers of ``value`` into ``array``, which has as many."""
+    value = np.ravel(value)
+    if value.size != array.size:
+        raise ValueError(f"fatrop's driver expects {array.size} numbers, got {value.size}")
+    array[:] = value
+
+
 def _ptr(a: np.ndarray, kind: Any) -> Any:
     return a.ctypes.data_as(kind)
 
@@ -406,6 +414,15 @@ class FatropOcp:
         self._lock = threading.Lock()
         #: the non-finite evaluations of the last guarded solve
         self.nans = 0
+        #: a solve's arrays (:data:`SOLVE_ARRAYS`), allocated once: inputs copied in, outputs
+        #: copied out (fresh arrays and their addresses cost 30 us a solve)
+        nz, n_rows = sf.nz, self.n_rows
+        n_q = functions["nlp_f"].nnz_in(1)
+        self._inputs = [np.zeros(n) for n in (nz, n_q, nz, nz, n_rows, n_rows)]
+        whole = np.zeros(2 * nz + 2 * n_rows + 1)
+        self._outputs = dict(zip(("x", "g", "lam_g", "lam_x", "f"), np.split(
+            whole, np.cumsum([nz, n_rows, n_rows, nz]))))
+        self._addresses = tuple(a.ctypes.data for a in (*self._inputs, *self._outputs.values()))
 
     def _ask(self) -> int:
         """The guarded solve's question to its caller: stop? (An exception, such as
@@ -434,13 +451,10 @@ class FatropOcp:
         ``guard`` (where :attr:`guardable`), :class:`~ocgroupoid.nlp.isolated.Stopped` when it
         was left (:class:`Guard`), fatrop's solver abandoned; :class:`Unavailable` when the
         guard's timer could not be created."""
-        inputs = [_doubles(v) for v in (z0, q, lbz, ubz, lbg, ubg)]
-        nz, n_rows = self.form.nz, self.n_rows
-        x, g, lam_g, lam_x, f = np.split(np.zeros(2 * nz + 2 * n_rows + 1),
-                                         np.cumsum([nz, n_rows, n_rows, nz]))
-        out = {"x": x, "g": g, "lam_g": lam_g, "lam_x": lam_x, "f": f}
-        s = _Solve(*(a.ctypes.data for a in (*inputs, x, g, lam_g, lam_x, f)))
         with self._lock:  # one solve at a time: the driver's memory and solver are shared
+            for array, value in zip(self._inputs, (z0, q, lbz, ubz, lbg, ubg)):
+                _fill(array, value)
+            s = _Solve(*self._addresses)
             if guard is not None:
                 s.guarded, s.every = 1, guard.every
                 s.nan_limit = min(guard.nan_limit, 2**31 - 1)
@@ -454,6 +468,7 @@ class FatropOcp:
                 self._stop = never
             raised, self._raised = self._raised, []
             self._last, self.nans = s, s.nans
+            out = {name: v.copy() for name, v in self._outputs.items()}
         if raised:
             raise raised[0]
         if s.left < 0:
