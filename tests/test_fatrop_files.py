@@ -40,21 +40,21 @@ def test_fatrop_converges_without_fallback(path: Path, N: int) -> None:
     assert abs(run.cost - ipopt.f) <= TOL * abs(ipopt.f), (run.cost, ipopt.f)
 
 
-def assert_about_ipopts_iterations(path: Path, N: int, overrides: tuple[str, ...] = ()) -> None:
+def assert_about_ipopts_iterations(path: Path, N: int, overrides: tuple[str, ...] = (),
+                                   factor: float = 1.2) -> None:
     """fatrop and IPOPT on the file's NLP (N intervals, its own options, ``overrides``) from
-    the first guess: both succeed, at the same cost, fatrop in at most 1.2 IPOPT's iterations
-    and 2 more."""
+    the first guess: both succeed, at the same cost, fatrop in at most ``factor`` times
+    IPOPT's iterations and 2 more."""
     cfg = files.load(path, [f"horizon.N={N}", *overrides])
-    f, d = cfg.file, cfg.file.discretization
-    tr = compile_problem(files.build(cfg), N, d.retraction, d.rule, f.solver.ipopt, d.scheme,
-                         d.steps, False, "fatrop").transcription
+    tr = compile_problem(files.build(cfg), files.method(cfg), files.options(cfg),
+                         backend="fatrop", jit=False).transcription
     p = tr.pack()
     start = Start(tr.point(tr.guesses(p)[0], p), p)
     fatrop, ipopt = (backend.run(start) for backend in tr.backends)
     assert fatrop.success and ipopt.success, (fatrop.status, ipopt.status)
     assert abs(fatrop.f - ipopt.f) <= TOL * abs(ipopt.f)
-    assert fatrop.iterations <= 1.2 * ipopt.iterations + 2, (fatrop.iterations,
-                                                               ipopt.iterations)
+    assert fatrop.iterations <= factor * ipopt.iterations + 2, (fatrop.iterations,
+                                                                  ipopt.iterations)
 
 
 def test_fatrop_takes_about_ipopts_iterations_on_saturated_controls_of_their_own() -> None:
@@ -75,6 +75,15 @@ def test_fatrop_takes_about_ipopts_iterations_on_bounded_recovered_controls(N: i
     four points per interval it regularised near the solution: 61 and 72 (IPOPT 29, 33)."""
     assert_about_ipopts_iterations(ROOT / "problems" / "so3_minimum_time.yaml", N,
                                    ("discretization.scheme=order4",))
+
+
+@pytest.mark.parametrize("N", [32, 64])
+def test_the_reaction_wheels_barrier_setting_shortens_fatrops_crawl(N: int) -> None:
+    """With both limits active, fatrop's stage-wise factorisation calls the KKT system
+    indefinite once its barrier parameter is small and crawls; the file lowers it as mu^1.2,
+    not mu^1.5 (``solver.fatrop``): order4 then takes 29 and 40 iterations (IPOPT 23 and 25),
+    where it took 63 and 53."""
+    assert_about_ipopts_iterations(ROOT / "problems" / "reaction_wheels.yaml", N, factor=1.7)
 
 
 @pytest.mark.parametrize("scheme,N", [("order4", 32), ("order4", 64), ("order2", 32),
