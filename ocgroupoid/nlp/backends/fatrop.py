@@ -308,10 +308,6 @@ class FatropBackend(Backend):
         #: the non-finite evaluations of the last run
         self.nans = 0
         self._isolated = Isolated(self._solve_here)
-        x0, p = ca.MX.sym("x0", sf.z_slot.size), ca.MX.sym("p", self.bounds.size1_in(0))
-        #: :meth:`arguments` of numbers as one call (so3, N = 4: 34 against 53 us in steps)
-        self._arguments = Buffered(ca.Function(f"{name}_arguments", [x0, p], list(
-            self.arguments(x0, p).values()), ["x0", "p"], [f"{a}_out" for a in ARGUMENTS]))
         #: the time the build took (stage form, Functions, jit, nlpsol or the driver's maps)
         self.build_seconds = time.perf_counter() - t0
 
@@ -336,6 +332,14 @@ class FatropBackend(Backend):
         return Buffered(ca.Function(f"{self._name}_whole", [x0, p],
                                     list(self._solve_graph(self.solver, x0, p).values()),
                                     ["x0", "p"], list(UNSCALED)))
+
+    @cached_property
+    def _arguments(self) -> Buffered:
+        """:meth:`arguments` of numbers as one call (so3, N = 4: 34 against 53 us in steps),
+        built at the first solve."""
+        x0, p = ca.MX.sym("x0", self.form.z_slot.size), ca.MX.sym("p", self.bounds.size1_in(0))
+        return Buffered(ca.Function(f"{self._name}_arguments", [x0, p], list(
+            self.arguments(x0, p).values()), ["x0", "p"], [f"{a}_out" for a in ARGUMENTS]))
 
     def arguments(self, x0: Any, p: Any) -> dict[str, Any]:
         """The solver's inputs in stage form, for an original point x0 and parameters p (numbers,
