@@ -41,7 +41,14 @@ from .mpc import MpcResult, mpc
 from .nlp import Discretization, Guess, Method, SolverOptions, Transcription
 from .plotting import plot, view  # registers Solution.plot; matplotlib loads on use
 from .simulation import Simulation, simulate
-from .solve import CompiledProblem, Solution, compile_problem, solve, solve_to_accuracy
+from .solve import (
+    CompiledProblem,
+    Solution,
+    close_workers,
+    compile_problem,
+    solve,
+    solve_to_accuracy,
+)
 from .sweep import sweep  # Dask, pandas and pyarrow are imported when a sweep runs
 
 #: the names of earlier releases, still answered with a DeprecationWarning (:func:`__getattr__`)
@@ -64,7 +71,7 @@ __all__ = [
     "lie", "so3", "Problem", "GuessContext", "Groupoid", "LieGroupFactor", "Pair",
     "SphereAction", "Method", "SolverOptions", "Discretization", "Transcription", "Guess",
     "CompiledProblem", "compile_problem", "solve",
-    "solve_to_accuracy",
+    "solve_to_accuracy", "close_workers",
     "Solution", "OcgError", "ConfigError", "DimensionError", "SingularityError",
     "BoundaryError", "TranscriptionError", "SolverError", "export_c", "sweep", "__version__",
     "SO3", "SE3", "SE2", "se3", "se2", "plot", "view",

@@ -42,7 +42,41 @@ def test_parallel_gives_the_sequential_result(factory, N: int, starts: int) -> N
     assert report["starts"] == report["finished"] == two.starts
     assert report["sequential_seconds"] == pytest.approx(two.ipopt_seconds_total)
     assert 0 < report["best_start_seconds"] <= report["sequential_seconds"]
+    parallel.close()
     assert not __import__("multiprocessing").active_children()  # the workers ended
+
+
+def _pids() -> list[int]:
+    assert parallel._kept is not None
+    return [proc.pid for proc in parallel._kept.procs]
+
+
+def test_the_workers_are_kept_for_the_next_multistart_of_the_same_grid() -> None:
+    """A second multi-start of the same transcription runs on the same workers with the same
+    result; a worker that died is replaced; another grid ends them and forks its own;
+    ``close`` ends them."""
+    import multiprocessing
+
+    solver = og.compile_problem(rigid_body(), N=16, workers=2)
+    first = solver.solve(multistart=2)
+    kept = _pids()
+    again = solver.solve(multistart=2)
+    assert _pids() == kept and again.cost == pytest.approx(first.cost, rel=1e-12)
+    assert again.discretization["start"] == first.discretization["start"]
+    os.kill(kept[0], 9)
+    while parallel._kept.procs[0].is_alive():
+        time.sleep(0.01)
+    third = solver.solve(multistart=2)  # not a failed start: new workers
+    assert "failed" not in third.diagnostics["multistart"]
+    assert third.cost == pytest.approx(first.cost, rel=1e-12)
+    replaced = _pids()
+    assert not set(replaced) & set(kept)
+    og.compile_problem(rigid_body(), N=8, workers=2).solve(multistart=2)
+    assert not set(_pids()) & set(replaced)
+    alive = {p.pid for p in multiprocessing.active_children()}
+    assert alive == set(_pids())  # the other grid's workers ended
+    parallel.close()
+    assert parallel._kept is None and not multiprocessing.active_children()
 
 
 @pytest.mark.parametrize("workers", [0, -1, 1.5, True, "2"])
@@ -94,13 +128,12 @@ def test_a_further_start_waits_for_the_first_starts_budget() -> None:
 
     ctx = multiprocessing.get_context("fork")
     shared = parallel._Shared(ctx.Event(), ctx.RawValue("q", parallel._UNKNOWN),
-                              ctx.RawValue("d", 1e9), START_BUDGET, 1e9,
-                              os.getppid())  # as a worker sees its parent
+                              ctx.RawValue("d", 1e9), os.getppid())  # as a worker sees it
     sent: list = []
     conn = type("Conn", (), {"send": lambda self, m: sent.append(m)})()
     waited = [0.0]
-    first = parallel._listener(conn, 0, time.monotonic() + 60, shared, waited)
-    further = parallel._listener(conn, 1, time.monotonic() + 60, shared, waited)
+    first = parallel._listener(conn, _task(0), shared, waited)
+    further = parallel._listener(conn, _task(1), shared, waited)
     assert not first(200, 1.0, 0.0) and not further(29, 1.0, 0.0)
     timer = threading.Timer(0.2, lambda: setattr(shared.budget, "value", 45))
     timer.start()
@@ -112,6 +145,11 @@ def test_a_further_start_waits_for_the_first_starts_budget() -> None:
     assert not further(1000, 1.0, 0.0)
     shared.stop.set()
     assert first(1, 1.0, 0.0) and further(1, 1.0, 0.0)
+
+
+def _task(i: int) -> parallel._Task:
+    """Start i as a worker gets it: a deadline a minute away, progress never."""
+    return parallel._Task(i, None, np.zeros(0), time.monotonic() + 60, START_BUDGET, 1e9)
 
 
 def _first(iterations: int, seconds: float, success: bool = True) -> RawResult:
@@ -141,17 +179,17 @@ def test_a_further_start_in_a_worker_is_stopped_by_its_seconds() -> None:
 
     ctx = multiprocessing.get_context("fork")
     shared = parallel._Shared(ctx.Event(), ctx.RawValue("q", 1000), ctx.RawValue("d", 0.3),
-                              START_BUDGET, 1e9, os.getppid())
+                              os.getppid())
     conn = type("Conn", (), {"send": lambda self, m: None})()
     waited = [0.0]
-    further = parallel._listener(conn, 1, time.monotonic() + 60, shared, waited)
+    further = parallel._listener(conn, _task(1), shared, waited)
     assert not further(1, 1.0, 0.0)
     time.sleep(0.2)
     waited[0] = 0.15  # as if it had waited that long at the smallest budget
     assert not further(2, 1.0, 0.0)
     time.sleep(0.3)
     assert further(3, 1.0, 0.0)
-    assert not parallel._listener(conn, 0, time.monotonic() + 60, shared, [0.0])(3, 1.0, 0.0)
+    assert not parallel._listener(conn, _task(0), shared, [0.0])(3, 1.0, 0.0)
 
 
 @pytest.mark.parametrize("workers", [1, 2])

@@ -6,9 +6,10 @@ from .accuracy import Level, solve_to_accuracy
 from .compiled import CompiledProblem, Minimum, distinct_minima
 from .entry import compile_problem, solve
 from .guesses import geodesic_guesses, interpolate, perturbed_guesses
+from .parallel import close as close_workers
 from .readout import make_solution
 from .solution import Solution, write_atomic
 
 __all__ = ["CompiledProblem", "compile_problem", "solve", "Solution", "Minimum", "distinct_minima",
            "make_solution", "geodesic_guesses", "perturbed_guesses", "interpolate",
-           "write_atomic", "solve_to_accuracy", "Level"]
+           "write_atomic", "solve_to_accuracy", "Level", "close_workers"]

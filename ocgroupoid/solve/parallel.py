@@ -4,17 +4,29 @@
 ``quadrotor.yaml`` (N = 64) in two threads, each with its own nlpsol, took 0.95-1.1 s against
 0.9-1.0 s one after the other. Starts overlap only in separate processes.
 
-**How the solver gets into a worker.** The workers are forked from the solving process once
-per multi-start, so each holds the compiled :class:`~ocgroupoid.nlp.transcription.Transcription`
-as it is: its nlpsol instances, the iteration callback, the libraries ``solver.jit`` loaded
-and any Python hook of the problem, for the price of a fork (15-25 ms each, measured). The
-alternatives cost more and cover less: serialising IPOPT's nlpsol Function took 0.11 s, its
-11 MB through a pipe and 0.13 s to deserialise, and the iteration callback (a Python object)
-has to be rebuilt beside it; rebuilding the transcription from the problem took 0.34 s, and a
-problem holding CasADi SX expressions or Python hooks does not pickle in general. A worker's
-copy of a fatrop backend forks its own helper where it needs one
-(:mod:`~ocgroupoid.nlp.isolated`). Only the start (its guess and the parameters) goes to a
-worker and only its :class:`~ocgroupoid.nlp.transcription.RawResult` comes back.
+**How the solver gets into a worker.** The workers are forked from the solving process at
+the first multi-start of a transcription, so each holds the compiled
+:class:`~ocgroupoid.nlp.transcription.Transcription` as it is: its nlpsol instances, the
+iteration callback, the libraries ``solver.jit`` loaded and any Python hook of the problem, for
+the price of a fork (2-5 ms each for so3 at N = 64, measured 2026-12-04). The alternatives cost
+more and cover less: serialising IPOPT's nlpsol Function took 0.11 s, its 11 MB through a pipe
+and 0.13 s to deserialise, and the iteration callback (a Python object) has to be rebuilt
+beside it; rebuilding the transcription from the problem took 0.34 s, and a problem holding
+CasADi SX expressions or Python hooks does not pickle in general. A worker's copy of a fatrop
+backend forks its own helper where it needs one (:mod:`~ocgroupoid.nlp.isolated`). Only the
+start (its guess and the parameters) goes to a worker and only its
+:class:`~ocgroupoid.nlp.transcription.RawResult` comes back.
+
+**The workers are kept.** Once a multi-start has ended the workers wait for the next one of the
+same transcription (and rescue) on as many workers: a solve repeated on one grid (a sweep, a
+controller's next sample, a benchmark's repeats) pays neither the forks nor the first solve of
+a fresh process, which writes to the pages it shares with its parent (so3, N = 64: 1435 page
+faults, and that start 10-20 ms slower than in the solving process, measured). One set of
+workers lives at a time: a multi-start of another transcription ends them and forks its own,
+as do a worker that died or a start that failed in it, Ctrl-C and the deadline; :func:`close`
+ends them, and so does the end of the solving process. What changes in the solving process
+after the fork (a Python hook's globals, a patched function) does not reach kept workers: call
+:func:`close` after such a change.
 
 **The same result as one start after the other.** Starts are handed out in their order and
 reported in it, whatever order they finish in. The iteration budget of a further start
@@ -43,6 +55,7 @@ raises in its worker, or whose worker dies, is reported as a failed start (statu
 
 from __future__ import annotations
 
+import atexit
 import multiprocessing as mp
 import os
 import signal
@@ -167,15 +180,32 @@ def plan(workers: int | None, starts: int) -> tuple[int, str]:
 @dataclass(frozen=True)
 class _Shared:
     """What every worker reads: the stop event, the further starts' budget (iterations and
-    seconds, shared numbers), the budget rule, the seconds between two progress messages and
-    the solving process's pid (a worker whose parent is gone ends)."""
+    seconds, shared numbers) and the solving process's pid (a worker whose parent is gone
+    ends)."""
 
     stop: Any
     budget: Any
     seconds: Any
+    parent: int
+
+    def reset(self) -> None:
+        """Before a multi-start on kept workers: no stop, the first start's budget unknown."""
+        self.stop.clear()
+        self.seconds.value = 0.0
+        self.budget.value = _UNKNOWN
+
+
+@dataclass(frozen=True)
+class _Task:
+    """One start as a worker gets it: its number, guess, parameters and deadline, the
+    further starts' budget rule and the seconds between two progress messages."""
+
+    i: int
+    guess: Guess
+    p: np.ndarray
+    deadline: float
     rule: Rule
     every: float
-    parent: int
 
 
 def _over(i: int, shared: _Shared, began: float, waited: list[float]) -> Callable[[], bool]:
@@ -192,12 +222,13 @@ def _over(i: int, shared: _Shared, began: float, waited: list[float]) -> Callabl
     return over
 
 
-def _listener(conn: Connection, i: int, deadline: float, shared: _Shared,
+def _listener(conn: Connection, task: _Task, shared: _Shared,
               waited: list[float]) -> Callable[[int, float, float], bool]:
     """A worker's iteration callback: progress to the solving process at most every
-    ``shared.every`` seconds; stop on the stop event, past the deadline, or at the budget of a
+    ``task.every`` seconds; stop on the stop event, past the deadline, or at the budget of a
     further start, waiting at the smallest budget until the first start has set it (the
     seconds waited added to ``waited[0]``: not the start's solver time)."""
+    i, deadline, rule = task.i, task.deadline, task.rule
     last = [time.perf_counter()]
     began = last[0]
 
@@ -207,7 +238,7 @@ def _listener(conn: Connection, i: int, deadline: float, shared: _Shared,
 
     def listen(iteration: int, objective: float, infeasibility: float) -> bool:
         now = time.perf_counter()
-        if now - last[0] >= shared.every:
+        if now - last[0] >= task.every:
             last[0] = now
             conn.send(("progress", i, (iteration, objective, infeasibility)))
         if stopped():
@@ -215,7 +246,7 @@ def _listener(conn: Connection, i: int, deadline: float, shared: _Shared,
         if i == 0:
             return False
         if shared.budget.value == _UNKNOWN:  # the first start is still running
-            if iteration < shared.rule.least:
+            if iteration < rule.least:
                 return False
             t0 = time.perf_counter()
             try:
@@ -243,17 +274,17 @@ def _serve(conn: Connection, tr: Transcription, shared: _Shared,
         while not conn.poll(1.0):
             if os.getppid() != shared.parent:
                 return
-        task = conn.recv()
+        task: _Task | None = conn.recv()
         if task is None:
             return
-        i, guess, p, deadline = task
+        i = task.i
         waited = [0.0]
         try:
-            r = tr.solve(guess, p, _listener(conn, i, deadline, shared, waited), deadline,
-                         _over(i, shared, time.perf_counter(), waited),
+            r = tr.solve(task.guess, task.p, _listener(conn, task, shared, waited),
+                         task.deadline, _over(i, shared, time.perf_counter(), waited),
                          rescue if i == 0 else None)
             if i > 0:
-                r = budgeted(r, deadline, shared.stop.is_set())
+                r = budgeted(r, task.deadline, shared.stop.is_set())
             conn.send(("done", i, replace(r, solve_seconds=r.solve_seconds - waited[0])))
         except Exception as err:  # noqa: BLE001  (reported as a failed start)
             conn.send(("error", i, f"{type(err).__name__}: {err}"))
@@ -266,6 +297,90 @@ def _failed(tr: Transcription, guess: Guess, p: np.ndarray, why: str) -> RawResu
                      float("inf"), WORKER_FAILED, False, 0, 0.0, np.zeros(tr.nx))
 
 
+@dataclass
+class _Pool:
+    """Worker processes forked from the solving process (``owner``) for one transcription
+    and rescue, kept between multi-starts (module docstring)."""
+
+    owner: int
+    tr: Transcription
+    rescue: Rescue | None
+    shared: _Shared
+    conns: list[Connection]
+    procs: list[Any]
+
+    def serves(self, tr: Transcription, workers: int, rescue: Rescue | None) -> bool:
+        """Whether these workers, all alive, can solve the starts of ``tr`` with ``rescue``
+        on ``workers`` processes."""
+        return (self.owner == os.getpid() and self.tr is tr and self.rescue is rescue
+                and len(self.procs) == workers and all(p.is_alive() for p in self.procs))
+
+    def close(self) -> None:
+        """End the workers: stop their starts, tell them to end, kill those still running
+        after :data:`GRACE` seconds."""
+        if self.owner != os.getpid():  # a copy in a forked child: not its workers
+            return
+        self.shared.stop.set()
+        for conn, proc in zip(self.conns, self.procs):
+            if proc.is_alive():
+                try:
+                    conn.send(None)
+                except OSError:
+                    pass
+        end = time.monotonic() + GRACE
+        for proc in self.procs:
+            proc.join(max(0.0, end - time.monotonic()))
+            if proc.is_alive():
+                proc.kill()
+                proc.join()
+        for conn in self.conns:
+            conn.close()
+
+
+_kept: _Pool | None = None  # the workers of the last multi-start, if kept
+
+
+def close() -> None:
+    """End the worker processes the last multi-start kept for the next one, if any
+    (:mod:`ocgroupoid.solve.parallel`): after a change in this process they should see (what a
+    Python hook of the problem reads), or to free them; the next multi-start forks new ones."""
+    global _kept
+    pool, _kept = _kept, None
+    if pool is not None:
+        pool.close()
+
+
+atexit.register(close)
+
+
+def _pool(tr: Transcription, workers: int, rescue: Rescue | None) -> _Pool:
+    """The kept workers when they serve ``tr`` and ``rescue`` on ``workers`` processes, ready
+    for a multi-start; else (the kept ones ended) ``workers`` new ones."""
+    global _kept
+    if _kept is not None and _kept.serves(tr, workers, rescue):
+        pool, _kept = _kept, None
+        pool.shared.reset()
+        return pool
+    close()
+    ctx = mp.get_context("fork")
+    for backend in tr.backends:  # IPOPT's instance with the iteration callback, built once
+        if isinstance(backend, IpoptBackend):  # here for every worker (else in each)
+            backend.watched_solver  # noqa: B018
+    shared = _Shared(ctx.Event(), ctx.RawValue("q", _UNKNOWN), ctx.RawValue("d", 0.0),
+                     os.getpid())
+    pool = _Pool(os.getpid(), tr, rescue, shared, [], [])
+    with warnings.catch_warnings():  # a multi-threaded caller: the workers have one thread
+        warnings.simplefilter("ignore", DeprecationWarning)
+        for _ in range(workers):
+            mine, theirs = ctx.Pipe()
+            proc = ctx.Process(target=_serve, args=(theirs, tr, shared, rescue), daemon=True)
+            proc.start()
+            theirs.close()
+            pool.conns.append(mine)
+            pool.procs.append(proc)
+    return pool
+
+
 def run(tr: Transcription, starts: Sequence[Guess], p: np.ndarray, workers: int,
         where: Callable[[int], str], progress: Callable[[str], None], interrupt: Interrupt,
         deadline: float, rule: Rule, every: float, rescue: Rescue | None = None
@@ -275,25 +390,12 @@ def run(tr: Transcription, starts: Sequence[Guess], p: np.ndarray, workers: int,
     1, label, error). ``where(i)`` names start i for ``progress``, which hears each start as
     it is handed out and as it finishes, and the workers' iterations; ``rule`` is the
     further starts' budget, ``every`` the seconds between two progress messages
-    of a start."""
-    ctx = mp.get_context("fork")
-    for backend in tr.backends:  # IPOPT's instance with the iteration callback, built once
-        if isinstance(backend, IpoptBackend):  # here for every worker (else in each)
-            backend.watched_solver  # noqa: B018
-    shared = _Shared(ctx.Event(), ctx.RawValue("q", _UNKNOWN), ctx.RawValue("d", 0.0), rule,
-                     every, os.getpid())
-    conns: list[Connection] = []
-    procs: list[Any] = []
+    of a start. The workers are kept for the next multi-start when every start ran and
+    none was stopped (:func:`close` ends them)."""
+    global _kept
+    pool = _pool(tr, workers, rescue)
+    shared, conns, procs = pool.shared, pool.conns, pool.procs
     failed: list[dict[str, Any]] = []
-    with warnings.catch_warnings():  # a multi-threaded caller: the workers have one thread
-        warnings.simplefilter("ignore", DeprecationWarning)
-        for _ in range(workers):
-            mine, theirs = ctx.Pipe()
-            proc = ctx.Process(target=_serve, args=(theirs, tr, shared, rescue), daemon=True)
-            proc.start()
-            theirs.close()
-            conns.append(mine)
-            procs.append(proc)
     results: dict[int, RawResult] = {}
     todo = list(range(len(starts)))
     running: dict[int, int] = {}  # worker -> the start it solves
@@ -312,7 +414,7 @@ def run(tr: Transcription, starts: Sequence[Guess], p: np.ndarray, workers: int,
                     progress(where(i))
                     running[w] = i
                     try:
-                        conns[w].send((i, starts[i], p, deadline))
+                        conns[w].send(_Task(i, starts[i], p, deadline, rule, every))
                     except OSError:  # it died: its sentinel says so below
                         pass
             if not alive:  # every worker died: what is left cannot run
@@ -327,16 +429,19 @@ def run(tr: Transcription, starts: Sequence[Guess], p: np.ndarray, workers: int,
             for w in list(running):
                 if conns[w] in ready or procs[w].sentinel in ready:
                     _receive(w, conns[w], procs[w], running, results, shared, fail, where,
-                             progress, deadline, len(starts))
+                             progress, deadline, len(starts), rule)
     finally:
-        _stop(shared, conns, procs)
+        if running or shared.stop.is_set() or failed:
+            pool.close()
+        else:
+            _kept = pool
     return [results[i] for i in sorted(results)], failed
 
 
 def _receive(w: int, conn: Connection, proc: Any, running: dict[int, int],
              results: dict[int, RawResult], shared: _Shared, fail: Callable[[int, str], None],
              where: Callable[[int], str], progress: Callable[[str], None], deadline: float,
-             total: int) -> None:
+             total: int, rule: Rule) -> None:
     """Read what worker w sent: progress, its start's result or error; or see it dead."""
     i = running[w]
     while conn.poll():
@@ -354,41 +459,21 @@ def _receive(w: int, conn: Connection, proc: Any, running: dict[int, int],
             r: RawResult = timed(value, deadline)
             results[j] = r
             progress(f"{len(results)}/{total} starts done; {where(j)}: {r.status}")
-        _settle(shared, j, results.get(j))
+        _settle(shared, rule, j, results.get(j))
         return
     if not proc.is_alive():
         del running[w]
         code = proc.exitcode
         fail(i, "its worker process died (" + (f"signal {-code}" if code is not None and
                                                 code < 0 else f"exit code {code}") + ")")
-        _settle(shared, i, None)
+        _settle(shared, rule, i, None)
 
 
-def _settle(shared: _Shared, i: int, r: RawResult | None) -> None:
+def _settle(shared: _Shared, rule: Rule, i: int, r: RawResult | None) -> None:
     """Once the first start has ended: the further starts' budget (:func:`budget_after`;
     none when it failed), as in turn."""
     if i == 0:
-        budget = None if r is None else budget_after(r, shared.rule)
+        budget = None if r is None else budget_after(r, rule)
         if budget is not None:
             shared.seconds.value = budget.seconds  # before the iterations, which workers poll
         shared.budget.value = _UNLIMITED if budget is None else budget.iterations
-
-
-def _stop(shared: _Shared, conns: list[Connection], procs: list[Any]) -> None:
-    """End the workers: stop their starts, tell them to end, kill those still running after
-    :data:`GRACE` seconds."""
-    shared.stop.set()
-    for conn, proc in zip(conns, procs):
-        if proc.is_alive():
-            try:
-                conn.send(None)
-            except OSError:
-                pass
-    end = time.monotonic() + GRACE
-    for proc in procs:
-        proc.join(max(0.0, end - time.monotonic()))
-        if proc.is_alive():
-            proc.kill()
-            proc.join()
-    for conn in conns:
-        conn.close()
