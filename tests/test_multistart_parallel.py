@@ -79,6 +79,32 @@ def test_the_workers_are_kept_for_the_next_multistart_of_the_same_grid() -> None
     assert parallel._kept is None and not multiprocessing.active_children()
 
 
+def test_one_set_of_workers_is_kept_when_two_threads_multistart_at_once() -> None:
+    """A multi-start in a thread holds its workers while another one, in the main thread,
+    forks and keeps its own: whichever ends last keeps its set and ends the other's."""
+    import multiprocessing
+    import threading
+
+    go = threading.Event()
+
+    def held(line: str) -> None:  # the thread's multi-start waits at its first start
+        go.wait(60)
+
+    thread = threading.Thread(target=og.compile_problem(rigid_body(), N=8, workers=2).solve,
+                              kwargs={"multistart": 2, "progress": held})
+    thread.start()
+    try:
+        while len(multiprocessing.active_children()) < 2:  # the thread's workers forked
+            time.sleep(0.01)
+        og.compile_problem(rigid_body(), N=16, workers=2).solve(multistart=2)
+        assert len(multiprocessing.active_children()) == 4  # both sets alive
+    finally:
+        go.set()
+        thread.join(60)
+    assert {p.pid for p in multiprocessing.active_children()} == set(_pids())
+    parallel.close()
+
+
 @pytest.mark.parametrize("workers", [0, -1, 1.5, True, "2"])
 def test_workers_are_checked(workers) -> None:
     with pytest.raises(ConfigError, match="workers is the number of processes"):

@@ -434,6 +434,7 @@ def run(tr: Transcription, starts: Sequence[Guess], p: np.ndarray, workers: int,
         if running or shared.stop.is_set() or failed:
             pool.close()
         else:
+            close()  # another thread's workers, kept meanwhile: one set at a time
             _kept = pool
     return [results[i] for i in sorted(results)], failed
 
