@@ -43,10 +43,11 @@ def schemes(path: Path) -> list[str]:
 
 
 def transcription(path: Path, scheme: str, N: int, backend: str = "fatrop") -> Any:
+    """The file's NLP at N with ``scheme``, built with the file's method and solver options
+    (its ``solver.ipopt`` and ``solver.fatrop`` among them) on CasADi's virtual machine."""
     cfg = files.load(path, [f"horizon.N={N}", f"discretization.scheme={scheme}"])
-    f, d = cfg.file, cfg.file.discretization
-    return compile_problem(files.build(cfg), N, d.retraction, d.rule, f.solver.ipopt, d.scheme,
-                           d.steps, False, backend).transcription
+    return compile_problem(files.build(cfg), files.method(cfg), files.options(cfg),
+                           backend=backend, jit=False).transcription
 
 
 def measure(path: Path, scheme: str, N: int) -> dict[str, Any]:

@@ -28,9 +28,8 @@ CASES = [pytest.param(path, N, id=f"{path.stem}-N{N}") for path in PROBLEMS for 
 @pytest.mark.parametrize("path,N", CASES)
 def test_fatrop_converges_without_fallback(path: Path, N: int) -> None:
     cfg = files.load(path, [f"horizon.N={N}"])
-    f, d = cfg.file, cfg.file.discretization
-    tr = compile_problem(files.build(cfg), N, d.retraction, d.rule, f.solver.ipopt, d.scheme,
-                         d.steps, False, "fatrop").transcription
+    tr = compile_problem(files.build(cfg), files.method(cfg), files.options(cfg),
+                         backend="fatrop", jit=False).transcription
     p = tr.pack()
     guess = tr.guesses(p)[0]
     run = tr.solve(guess, p)
