@@ -13,6 +13,7 @@ start is, between fatrop's failure and IPOPT's fallback.
 
 from __future__ import annotations
 
+import copy
 import time
 from dataclasses import dataclass, replace
 from typing import Any, Callable, Iterable, Sequence
@@ -144,6 +145,8 @@ class CompiledProblem:
         self.transcription = Transcription(problem, self.disc, options)
         self._coarse: dict[tuple[int, str | None, int | None], Transcription] = {}
         self._phased: dict[tuple[Any, ...], Transcription] = {}
+        #: per transcription, its last rescue (:meth:`_through`): the scheme, parameters, rescue
+        self._rescues: dict[int, tuple[str, np.ndarray, Rescue]] = {}
 
     def _at(self, N: int, scheme: str | None = None, max_iter: int | None = None
             ) -> Transcription:
@@ -249,7 +252,7 @@ class CompiledProblem:
                 # the cheaper scheme a failure of the final grid is rescued through, if any
                 cheaper = tr.scheme.rescue if i == len(plan) - 1 and not schemes and \
                     not _whole_point(given) else None
-                through = self._through(tr, cheaper, (params, initial, final, T)) \
+                through = self._through(tr, cheaper, (params, initial, final, T), p) \
                     if cheaper and tr.fatrop is not None else None
                 level, report = self._starts(tr, starts, p, progress, interrupt, deadline,
                                              through)
@@ -368,7 +371,8 @@ class CompiledProblem:
             return None, report
         return replace(runs[1], label=f"{start.label}, through {other}"), report
 
-    def _through(self, tr: Transcription, name: str, pack: tuple[Any, ...]) -> Rescue:
+    def _through(self, tr: Transcription, name: str, pack: tuple[Any, ...], p: np.ndarray
+                 ) -> Rescue:
         """The rescue of a start fatrop failed on (:func:`~ocgroupoid.nlp.backends.in_turn`,
         before IPOPT's fallback): fatrop on the scheme ``name`` (order2) on the same grid from
         the start's velocities (built on first use, also in a worker), then fatrop again from
@@ -379,8 +383,21 @@ class CompiledProblem:
         500 iterations, the cost 1e-5 above the optimum), which the rescue's order4 run
         repeats (the solve took 37 s with the rescue, 27-32 s without), and IPOPT's fallback
         finishes; nor after fatrop's acceptable stop, which IPOPT polishes
-        (:func:`~ocgroupoid.nlp.backends.in_turn`)."""
+        (:func:`~ocgroupoid.nlp.backends.in_turn`).
+
+        The same rescue as the last one of ``tr`` when the solve's parameters ``p`` (``pack``
+        packed) are the same: the workers a multi-start kept serve only the rescue they were
+        forked with (:mod:`~ocgroupoid.solve.parallel`). It holds its own copy of ``pack``,
+        which a later change to the caller's dictionaries does not reach."""
         assert tr.backends[0].name == "fatrop"  # (through_label)
+        last = self._rescues.get(id(tr))
+        if last is not None and last[0] == name and np.array_equal(last[1], p):
+            return last[2]
+        try:
+            pack = copy.deepcopy(pack)
+            keep = True
+        except Exception:  # noqa: BLE001  (an argument that does not copy: no reuse)
+            keep = False
 
         def rescue(start: Start, failed: Run) -> tuple[Run, str] | None:
             if failed.status == MAX_ITER:  # a crawl, not a breakdown: IPOPT's to finish
@@ -398,6 +415,8 @@ class CompiledProblem:
                           earlier=((name, cheap.status, cheap.iterations),))
             return run, through_label(name) if run.success else f"{name} rescue"
 
+        if keep:
+            self._rescues[id(tr)] = (name, np.array(p, dtype=float), rescue)
         return rescue
 
     def _starts(self, tr: Transcription, starts: list[Guess], p: np.ndarray,
