@@ -450,32 +450,6 @@ def test_the_first_start_fatrop_fails_on_is_rescued_through_order2() -> None:
     assert "rescue" not in best.diagnostics
 
 
-def test_the_rescue_is_the_same_for_the_same_parameters_and_keeps_its_own() -> None:
-    """One rescue per transcription and parameters (kept workers serve only the rescue they
-    were forked with): the same for equal parameters, another for other parameters or another
-    scheme; a change to the caller's dictionary after the call does not reach it."""
-    solver = og.compile_problem(heavy_top(), N=8, scheme="order4", backend="fatrop")
-    tr = solver.transcription
-    params = {"mgl": 1.0}
-    pack = (params, None, None, None)
-    first = solver._through(tr, "order2", pack, tr.pack(*pack))
-    assert solver._through(tr, "order2", ({"mgl": 1.0}, None, None, None),
-                           tr.pack({"mgl": 1.0})) is first
-    assert solver._through(tr, "order6", pack, tr.pack(*pack)) is not first
-    other = ({"mgl": 2.0}, None, None, None)
-    assert solver._through(tr, "order2", other, tr.pack(*other)) is not first
-    again = solver._through(tr, "order2", pack, tr.pack(*pack))
-    params["mgl"] = 3.0  # after the call: not the rescue's
-    p = tr.pack({"mgl": 1.0})
-    start = Start(tr.point(solver.guesses(tr, p, False)[0], p), p)
-    failed = Run(start.x0, 1.0, np.zeros(tr.ng), np.zeros(tr.nx), "Fatrop_Failed", False, 9, 1.0)
-    run, _ = again(start, failed)
-    params["mgl"] = 1.0
-    fresh = og.compile_problem(heavy_top(), N=8, scheme="order4", backend="fatrop")
-    expected, _ = fresh._through(fresh.transcription, "order2", pack, p)(start, failed)
-    assert run.success and np.allclose(run.x, expected.x, rtol=0, atol=1e-12)
-
-
 def test_fatrop_out_of_iterations_is_left_to_ipopt() -> None:
     """A fatrop run that reached its iteration limit crawled near a solution: the rescue
     is not tried (it would crawl again), IPOPT's fallback finishes; a breakdown is tried."""
@@ -483,7 +457,7 @@ def test_fatrop_out_of_iterations_is_left_to_ipopt() -> None:
     tr = solver.transcription
     p = tr.pack()
     start = Start(tr.point(solver.guesses(tr, p, False)[0], p), p)
-    rescue = solver._through(tr, "order2", (None, None, None, None), p)
+    rescue = solver._through(tr, "order2", (None, None, None, None))
 
     def failed(status: str) -> Run:
         return Run(start.x0, 1.0, np.zeros(tr.ng), np.zeros(tr.nx), status, False, 500, 1.0)

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import os
 import time
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -51,10 +52,20 @@ def _pids() -> list[int]:
     return [proc.pid for proc in parallel._kept.procs]
 
 
+def _alive_soon() -> set[int]:
+    """The child processes alive once those told to end have ended (10 s at most)."""
+    import multiprocessing
+
+    end = time.monotonic() + 10
+    while time.monotonic() < end and len(multiprocessing.active_children()) > len(_pids()):
+        time.sleep(0.01)
+    return {p.pid for p in multiprocessing.active_children()}
+
+
 def test_the_workers_are_kept_for_the_next_multistart_of_the_same_grid() -> None:
     """A second multi-start of the same transcription runs on the same workers with the same
-    result; a worker that died is replaced; another grid ends them and forks its own;
-    ``close`` ends them."""
+    result; a worker that died is replaced; another grid ends them (without waiting) and forks
+    its own; ``close`` ends them and waits for every worker told to end."""
     import multiprocessing
 
     solver = og.compile_problem(rigid_body(), N=16, workers=2)
@@ -73,10 +84,11 @@ def test_the_workers_are_kept_for_the_next_multistart_of_the_same_grid() -> None
     assert not set(replaced) & set(kept)
     og.compile_problem(rigid_body(), N=8, workers=2).solve(multistart=2)
     assert not set(_pids()) & set(replaced)
-    alive = {p.pid for p in multiprocessing.active_children()}
-    assert alive == set(_pids())  # the other grid's workers ended
-    parallel.close()
-    assert parallel._kept is None and not multiprocessing.active_children()
+    assert _alive_soon() == set(_pids())  # the other grid's workers end
+    og.compile_problem(rigid_body(), N=12, workers=2).solve(multistart=2)
+    parallel.close()  # waits for these and for the last grid's, told to end
+    assert parallel._kept is None and not parallel._ending
+    assert not multiprocessing.active_children()
 
 
 def test_one_set_of_workers_is_kept_when_two_threads_multistart_at_once() -> None:
@@ -94,15 +106,89 @@ def test_one_set_of_workers_is_kept_when_two_threads_multistart_at_once() -> Non
                               kwargs={"multistart": 2, "progress": held})
     thread.start()
     try:
-        while len(multiprocessing.active_children()) < 2:  # the thread's workers forked
+        while len(multiprocessing.active_children()) < 1:  # the thread's worker forked
             time.sleep(0.01)
         og.compile_problem(rigid_body(), N=16, workers=2).solve(multistart=2)
-        assert len(multiprocessing.active_children()) == 4  # both sets alive
+        assert len(multiprocessing.active_children()) == 2  # both sets alive
     finally:
         go.set()
         thread.join(60)
     assert {p.pid for p in multiprocessing.active_children()} == set(_pids())
     parallel.close()
+
+
+def test_the_solving_process_solves_the_first_start_and_takes_its_share(monkeypatch,
+                                                                       tmp_path) -> None:
+    """With two workers the solving process is one of them: it solves the first start (and
+    its rescue), and the worker forked beside it and it take the further starts in turn,
+    each start once; progress names every start once as it is handed out."""
+    import multiprocessing
+
+    solve = Transcription.solve
+    record = tmp_path / "solved"
+
+    def spy(self, guess, *args, **kwargs):
+        with open(record, "a") as out:
+            out.write(f"{guess.label}\t{os.getpid()}\n")
+        return solve(self, guess, *args, **kwargs)
+
+    monkeypatch.setattr(Transcription, "solve", spy)
+    progress: list[str] = []
+    sol = og.compile_problem(rigid_body(), N=16, workers=2).solve(multistart=3,
+                                                         progress=progress.append)
+    solved = [line.split("\t") for line in record.read_text().splitlines()]
+    labels = ["geodesic", "long way round", "perturbed 1", "perturbed 2", "perturbed 3"]
+    assert sorted(label for label, _ in solved) == sorted(labels)
+    assert dict(solved)["geodesic"] == str(os.getpid())
+    workers = {int(pid) for _, pid in solved} - {os.getpid()}
+    assert workers <= set(_pids()) and len(_pids()) == 1
+    assert len(multiprocessing.active_children()) == 1
+    handed = [line for line in progress if line.startswith("N=16: start ") and
+              line.endswith(")")]
+    assert sorted(handed) == sorted(f"N=16: start {i + 1}/5 ({label})"
+                                    for i, label in enumerate(labels))
+    assert sol.diagnostics["multistart"]["workers"] == 2
+    parallel.close()
+
+
+def test_starts_are_handed_out_once_and_in_order() -> None:
+    """Two processes taking starts at once get each start once, in increasing order each;
+    none after the stop or the deadline; reset hands out from the second start again."""
+    import multiprocessing
+
+    ctx = multiprocessing.get_context("fork")
+    shared = parallel._Shared.make(ctx, 2)
+    total, far = 3001, time.monotonic() + 600
+    together = ctx.Barrier(2)
+    readers = []
+    for w in range(2):
+        mine, theirs = ctx.Pipe(duplex=False)
+
+        def taker(w=w, theirs=theirs) -> None:
+            got = []
+            together.wait(60)
+            while (i := shared.take(total, far, w)) is not None:
+                got.append(i)
+            theirs.send(got)
+
+        proc = ctx.Process(target=taker)
+        proc.start()
+        readers.append((mine, proc))
+    got = [mine.recv() for mine, _ in readers]
+    for _, proc in readers:
+        proc.join()
+    assert all(g == sorted(g) for g in got)
+    assert sorted(got[0] + got[1]) == list(range(1, total))
+    assert [shared.taken[w] for w in range(2)] == [g[-1] if g else parallel._NONE for g in got]
+    shared.reset()
+    assert list(shared.taken) == [parallel._NONE] * 2
+    assert shared.take(total, far, 0) == 1 and shared.taken[0] == 1
+    assert shared.take(total, far, None) == 2 and shared.taken[1] == parallel._NONE
+    assert shared.take(total, time.monotonic() - 1, 0) is None  # past the deadline
+    shared.stop.set()
+    assert shared.take(total, far, 0) is None
+    shared.reset()
+    assert shared.take(2, far, 0) == 1 and shared.take(2, far, 0) is None
 
 
 @pytest.mark.parametrize("workers", [0, -1, 1.5, True, "2"])
@@ -121,46 +207,50 @@ def test_plan() -> None:
     assert parallel.plan(None, 9)[0] == min(parallel.cores(), 9)
 
 
-def test_a_start_that_fails_in_its_worker_is_reported(monkeypatch) -> None:
-    """One start raises in its worker, another's worker dies: both are reported as failed
-    starts, the others finish and the best of them is returned."""
+def test_a_start_that_fails_in_its_worker_is_reported(monkeypatch, tmp_path) -> None:
+    """One start raises in the worker, which then dies on the next: both are reported as
+    failed starts, the solving process solves the start left and the best is returned."""
     solve = Transcription.solve
+    here, died = os.getpid(), tmp_path / "died"
 
     def faulty(self, guess, *args, **kwargs):
-        if guess.label == "perturbed 1":
+        if os.getpid() == here and guess.label == "geodesic":  # the first start, this
+            end = time.monotonic() + 60  # process's: until the worker took both faulty ones
+            while not died.exists() and time.monotonic() < end:
+                time.sleep(0.01)
+        if os.getpid() != here and guess.label == "perturbed 1":
             raise RuntimeError("broken start")
-        if guess.label == "perturbed 2":
+        if os.getpid() != here and guess.label == "perturbed 2":
+            died.touch()
             os._exit(3)
         return solve(self, guess, *args, **kwargs)
 
-    monkeypatch.setattr(Transcription, "solve", faulty)  # the forked workers inherit it
+    monkeypatch.setattr(Transcription, "solve", faulty)  # the forked worker inherits it
     progress: list[str] = []
     sol = og.compile_problem(rigid_body(), N=16, workers=2).solve(multistart=3,
                                                          progress=progress.append)
     failed = {f["label"]: f["error"] for f in sol.diagnostics["multistart"]["failed"]}
     assert failed["perturbed 1"] == "RuntimeError: broken start"
     assert "died (exit code 3)" in failed["perturbed 2"]
+    assert len(failed) == 2
     assert sol.success and sol.starts == 5 and sol.diagnostics["multistart"]["finished"] == 5
     assert any("starts done" in line for line in progress)
     assert any("failed in its worker" in line for line in progress)
+    assert parallel._kept is None  # a failed start: the workers are not kept
 
 
 def test_a_further_start_waits_for_the_first_starts_budget() -> None:
-    """At the smallest budget a further start waits until the first start has set it, then
-    stops where it would have in turn; the first start has none."""
-    import multiprocessing
+    """At the smallest budget a further start in a worker waits until the first start (the
+    solving process's) has set it, then stops where it would have in turn."""
     import threading
-    import time
 
-    ctx = multiprocessing.get_context("fork")
-    shared = parallel._Shared(ctx.Event(), ctx.RawValue("q", parallel._UNKNOWN),
-                              ctx.RawValue("d", 1e9), os.getppid())  # as a worker sees it
+    shared = _as_a_worker_sees_it()
+    shared.seconds.value = 1e9
     sent: list = []
     conn = type("Conn", (), {"send": lambda self, m: sent.append(m)})()
     waited = [0.0]
-    first = parallel._listener(conn, _task(0), shared, waited)
-    further = parallel._listener(conn, _task(1), shared, waited)
-    assert not first(200, 1.0, 0.0) and not further(29, 1.0, 0.0)
+    further = parallel._listener(conn, 1, _batch(), shared, waited)
+    assert not further(29, 1.0, 0.0)
     timer = threading.Timer(0.2, lambda: setattr(shared.budget, "value", 45))
     timer.start()
     t0 = time.perf_counter()
@@ -170,12 +260,20 @@ def test_a_further_start_waits_for_the_first_starts_budget() -> None:
     shared.budget.value = parallel._UNLIMITED
     assert not further(1000, 1.0, 0.0)
     shared.stop.set()
-    assert first(1, 1.0, 0.0) and further(1, 1.0, 0.0)
+    assert further(1, 1.0, 0.0)
 
 
-def _task(i: int) -> parallel._Task:
-    """Start i as a worker gets it: a deadline a minute away, progress never."""
-    return parallel._Task(i, None, np.zeros(0), time.monotonic() + 60, START_BUDGET, 1e9)
+def _as_a_worker_sees_it():
+    """What a worker shares with its solving process (this test's parent, as it sees it)."""
+    import multiprocessing
+
+    shared = parallel._Shared.make(multiprocessing.get_context("fork"), 1)
+    return replace(shared, parent=os.getppid())
+
+
+def _batch() -> parallel._Batch:
+    """A multi-start as a worker gets it: a deadline a minute away, progress never."""
+    return parallel._Batch((), np.zeros(0), time.monotonic() + 60, START_BUDGET, 1e9)
 
 
 def _first(iterations: int, seconds: float, success: bool = True) -> RawResult:
@@ -200,22 +298,18 @@ def test_the_budget_follows_the_first_start() -> None:
 
 def test_a_further_start_in_a_worker_is_stopped_by_its_seconds() -> None:
     """Past the seconds of its budget a further start stops at its next iteration, the
-    seconds it waited for the first start not counted; with no budget it runs on."""
-    import multiprocessing
-
-    ctx = multiprocessing.get_context("fork")
-    shared = parallel._Shared(ctx.Event(), ctx.RawValue("q", 1000), ctx.RawValue("d", 0.3),
-                              os.getppid())
+    seconds it waited for the first start not counted."""
+    shared = _as_a_worker_sees_it()
+    shared.budget.value, shared.seconds.value = 1000, 0.3
     conn = type("Conn", (), {"send": lambda self, m: None})()
     waited = [0.0]
-    further = parallel._listener(conn, _task(1), shared, waited)
+    further = parallel._listener(conn, 1, _batch(), shared, waited)
     assert not further(1, 1.0, 0.0)
     time.sleep(0.2)
     waited[0] = 0.15  # as if it had waited that long at the smallest budget
     assert not further(2, 1.0, 0.0)
     time.sleep(0.3)
     assert further(3, 1.0, 0.0)
-    assert not parallel._listener(conn, _task(0), shared, [0.0])(3, 1.0, 0.0)
 
 
 @pytest.mark.parametrize("workers", [1, 2])

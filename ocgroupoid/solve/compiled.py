@@ -13,7 +13,6 @@ start is, between fatrop's failure and IPOPT's fallback.
 
 from __future__ import annotations
 
-import copy
 import time
 from dataclasses import dataclass, replace
 from typing import Any, Callable, Iterable, Sequence
@@ -31,7 +30,6 @@ from ..nlp.program import Guess
 from ..nlp.schemes import SCHEMES
 from ..nlp.shortcuts import choose
 from ..nlp.transcription import RawResult, Transcription
-from ..nlp.watch import Listener
 from ..verify import richardson
 from ..verify.diagnostics import replay_of
 from ..verify.verdict import REPLAY_TOLERANCE, scales
@@ -59,35 +57,6 @@ MAX_ITER = "Maximum_Iterations_Exceeded"
 
 def _noop(_: str) -> None:
     return None
-
-
-def _listener(where: str, progress: Progress, interrupt: Interrupt,
-              budget: parallel.Budget | None, deadline: float) -> Listener:
-    """IPOPT's iteration callback: progress (iteration, objective, infeasibility) at most
-    every :data:`PROGRESS_EVERY` seconds; a stop once Ctrl-C was pressed, once ``budget``
-    (iterations or seconds since the listener was made) is spent, or past ``deadline``
-    (``time.monotonic()``)."""
-    last = [time.perf_counter()]
-    began = last[0]
-
-    def listen(iteration: int, objective: float, infeasibility: float) -> bool:
-        now = time.perf_counter()
-        if now - last[0] >= PROGRESS_EVERY:
-            last[0] = now
-            progress(parallel.iteration_line(where, iteration, objective, infeasibility))
-        return interrupt.requested or time.monotonic() > deadline or \
-            (budget is not None and budget.spent(iteration, now - began))
-
-    return listen
-
-
-def _over(interrupt: Interrupt, budget: parallel.Budget | None) -> Callable[[], bool]:
-    """Whether a fatrop run, which has no iteration callback, should stop (asked by its guard
-    or its helper): Ctrl-C was pressed, or the seconds of a further start's ``budget`` (from
-    now) are spent."""
-    began = time.perf_counter()
-    return lambda: interrupt.requested or \
-        (budget is not None and time.perf_counter() - began >= budget.seconds)
 
 
 @dataclass
@@ -145,8 +114,6 @@ class CompiledProblem:
         self.transcription = Transcription(problem, self.disc, options)
         self._coarse: dict[tuple[int, str | None, int | None], Transcription] = {}
         self._phased: dict[tuple[Any, ...], Transcription] = {}
-        #: per transcription, its last rescue (:meth:`_through`): the scheme, parameters, rescue
-        self._rescues: dict[int, tuple[str, np.ndarray, Rescue]] = {}
 
     def _at(self, N: int, scheme: str | None = None, max_iter: int | None = None
             ) -> Transcription:
@@ -252,7 +219,7 @@ class CompiledProblem:
                 # the cheaper scheme a failure of the final grid is rescued through, if any
                 cheaper = tr.scheme.rescue if i == len(plan) - 1 and not schemes and \
                     not _whole_point(given) else None
-                through = self._through(tr, cheaper, (params, initial, final, T), p) \
+                through = self._through(tr, cheaper, (params, initial, final, T)) \
                     if cheaper and tr.fatrop is not None else None
                 level, report = self._starts(tr, starts, p, progress, interrupt, deadline,
                                              through)
@@ -352,8 +319,9 @@ class CompiledProblem:
             g = interpolate(via, runs[0].x, runs[0].p, t.N) if runs else start
             where = f"N={t.N}: {name} failed ({failed.status}), rescue: {t.disc.scheme}"
             progress(where)
-            r = t.solve(g, q, _listener(where, progress, interrupt, None, deadline), deadline,
-                        lambda: interrupt.requested)
+            listen, stop = parallel.watch(where, progress, interrupt, None, deadline,
+                                          PROGRESS_EVERY)
+            r = t.solve(g, q, listen, deadline, stop)
             runs.append(parallel.timed(r, deadline))
             self._spent += r.solve_seconds
             if not r.success or interrupt.requested or time.monotonic() > deadline:
@@ -371,11 +339,10 @@ class CompiledProblem:
             return None, report
         return replace(runs[1], label=f"{start.label}, through {other}"), report
 
-    def _through(self, tr: Transcription, name: str, pack: tuple[Any, ...], p: np.ndarray
-                 ) -> Rescue:
+    def _through(self, tr: Transcription, name: str, pack: tuple[Any, ...]) -> Rescue:
         """The rescue of a start fatrop failed on (:func:`~ocgroupoid.nlp.backends.in_turn`,
         before IPOPT's fallback): fatrop on the scheme ``name`` (order2) on the same grid from
-        the start's velocities (built on first use, also in a worker), then fatrop again from
+        the start's velocities (built on first use, in the solving process), then fatrop again from
         its solution; the run in ``tr``'s variables. Both runs are fatrop's alone, with
         :data:`RESCUE_ITERATIONS`: where they fail the start is hopeless more often than not,
         and IPOPT's fallback follows anyway. Not after fatrop ran out of iterations: that is a
@@ -383,21 +350,8 @@ class CompiledProblem:
         500 iterations, the cost 1e-5 above the optimum), which the rescue's order4 run
         repeats (the solve took 37 s with the rescue, 27-32 s without), and IPOPT's fallback
         finishes; nor after fatrop's acceptable stop, which IPOPT polishes
-        (:func:`~ocgroupoid.nlp.backends.in_turn`).
-
-        The same rescue as the last one of ``tr`` when the solve's parameters ``p`` (``pack``
-        packed) are the same: the workers a multi-start kept serve only the rescue they were
-        forked with (:mod:`~ocgroupoid.solve.parallel`). It holds its own copy of ``pack``,
-        which a later change to the caller's dictionaries does not reach."""
+        (:func:`~ocgroupoid.nlp.backends.in_turn`)."""
         assert tr.backends[0].name == "fatrop"  # (through_label)
-        last = self._rescues.get(id(tr))
-        if last is not None and last[0] == name and np.array_equal(last[1], p):
-            return last[2]
-        try:
-            pack = copy.deepcopy(pack)
-            keep = True
-        except Exception:  # noqa: BLE001  (an argument that does not copy: no reuse)
-            keep = False
 
         def rescue(start: Start, failed: Run) -> tuple[Run, str] | None:
             if failed.status == MAX_ITER:  # a crawl, not a breakdown: IPOPT's to finish
@@ -415,8 +369,6 @@ class CompiledProblem:
                           earlier=((name, cheap.status, cheap.iterations),))
             return run, through_label(name) if run.success else f"{name} rescue"
 
-        if keep:
-            self._rescues[id(tr)] = (name, np.array(p, dtype=float), rescue)
         return rescue
 
     def _starts(self, tr: Transcription, starts: list[Guess], p: np.ndarray,
@@ -445,8 +397,9 @@ class CompiledProblem:
             budget: parallel.Budget | None = None  # of a further start
             for i, g in enumerate(starts):
                 progress(where(i))
-                r = tr.solve(g, p, _listener(where(i), progress, interrupt, budget, deadline),
-                             deadline, _over(interrupt, budget), rescue if i == 0 else None)
+                listen, stop = parallel.watch(where(i), progress, interrupt, budget, deadline,
+                                              PROGRESS_EVERY)
+                r = tr.solve(g, p, listen, deadline, stop, rescue if i == 0 else None)
                 if i > 0:
                     r = parallel.budgeted(r, deadline, interrupt.requested)
                 level.append(parallel.timed(r, deadline))

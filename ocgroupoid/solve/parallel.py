@@ -4,6 +4,18 @@
 ``quadrotor.yaml`` (N = 64) in two threads, each with its own nlpsol, took 0.95-1.1 s against
 0.9-1.0 s one after the other. Starts overlap only in separate processes.
 
+**The solving process is one of the workers.** With ``workers`` w, w - 1 processes are forked
+and the solving process solves starts too: the first start (the one with the rescue of a
+fatrop grid, and the one whose iterations set the others' budget), then, like the forked
+workers, the next start nobody has taken, until none is left (:meth:`_Shared.take`: a shared
+counter under a lock, so that whoever is free takes the next start, in their order). Between
+its iterations it reads what the workers sent, so their progress reaches the caller as it
+happens. On two cores this forks one process, not two, and the first start runs where
+nothing has to be copied: so3's six starts at N = 64 (about 30 ms each), timed one by one,
+ran in 0.59 of their time in turn at the first multi-start of a process and 0.50 at the next
+ones; ``scripts/bench_multistart.py`` gives 0.51-0.68 on the problem files (measured
+2026-12-04).
+
 **How the solver gets into a worker.** The workers are forked from the solving process at
 the first multi-start of a transcription, so each holds the compiled
 :class:`~ocgroupoid.nlp.transcription.Transcription` as it is: its nlpsol instances, the
@@ -14,11 +26,11 @@ and 0.13 s to deserialise, and the iteration callback (a Python object) has to b
 beside it; rebuilding the transcription from the problem took 0.34 s, and a problem holding
 CasADi SX expressions or Python hooks does not pickle in general. A worker's copy of a fatrop
 backend forks its own helper where it needs one (:mod:`~ocgroupoid.nlp.isolated`). Only the
-start (its guess and the parameters) goes to a worker and only its
+starts (their guesses and the parameters) go to a worker and only each start's
 :class:`~ocgroupoid.nlp.transcription.RawResult` comes back.
 
 **The workers are kept.** Once a multi-start has ended the workers wait for the next one of the
-same transcription (and rescue) on as many workers: a solve repeated on one grid (a sweep, a
+same transcription on as many workers: a solve repeated on one grid (a sweep, a
 controller's next sample, a benchmark's repeats) pays neither the forks nor the first solve of
 a fresh process, which writes to the pages it shares with its parent (so3, N = 64: 1435 page
 faults, and that start 10-20 ms slower than in the solving process, measured). One set of
@@ -49,8 +61,10 @@ budget is the only limit, as in turn.
 catches it (:mod:`~ocgroupoid.solve.interrupt`), or its deadline sets a stop event that every
 worker's iteration callback (and fatrop's ``stop()``) reads: the running starts end at their
 next iteration and come back, the starts not handed out are skipped, as in turn. A start that
-raises in its worker, or whose worker dies, is reported as a failed start (status
-:data:`WORKER_FAILED`, the error in the report) and the others go on.
+raises in a forked worker, or whose worker dies, is reported as a failed start (status
+:data:`WORKER_FAILED`, the error in the report) and the others go on (a worker that died
+takes no more, the others and the solving process take them); a start that raises in the
+solving process raises, as in turn.
 """
 
 from __future__ import annotations
@@ -72,6 +86,7 @@ from ..nlp.backends import INTERRUPTED, TIMED_OUT, IpoptBackend
 from ..nlp.backends.policy import Rescue
 from ..nlp.program import Guess
 from ..nlp.transcription import RawResult, Transcription
+from ..nlp.watch import Listener
 from .interrupt import Interrupt
 
 #: the status of a start that raised in its worker process or lost it
@@ -80,6 +95,8 @@ WORKER_FAILED = "Worker_Failed"
 BUDGET_SPENT = "Start_Budget_Spent"
 #: a further start's budget before the first start has finished, and when it has none
 _UNKNOWN, _UNLIMITED = -2, -1
+#: no start (a worker that took none)
+_NONE = -1
 #: seconds between two looks at Ctrl-C, the deadline and the workers
 POLL = 0.05
 #: seconds the workers get to stop at their next iteration before they are killed
@@ -179,56 +196,84 @@ def plan(workers: int | None, starts: int) -> tuple[int, str]:
 
 @dataclass(frozen=True)
 class _Shared:
-    """What every worker reads: the stop event, the further starts' budget (iterations and
-    seconds, shared numbers) and the solving process's pid (a worker whose parent is gone
-    ends)."""
+    """What the solving process and its workers share: the stop event, the further starts'
+    budget (iterations and seconds), the next start to hand out and the start each worker
+    took (shared numbers; ``lock`` guards the handing out), and the solving process's pid (a
+    worker whose parent is gone ends)."""
 
     stop: Any
     budget: Any
     seconds: Any
+    next: Any
+    taken: Any
+    lock: Any
     parent: int
 
+    @classmethod
+    def make(cls, ctx: Any, workers: int) -> _Shared:
+        """For ``workers`` workers of this process, from the multiprocessing context ``ctx``."""
+        return cls(ctx.Event(), ctx.RawValue("q", _UNKNOWN), ctx.RawValue("d", 0.0),
+                   ctx.RawValue("q", 1), ctx.RawArray("q", [_NONE] * workers), ctx.Lock(),
+                   os.getpid())
+
     def reset(self) -> None:
-        """Before a multi-start on kept workers: no stop, the first start's budget unknown."""
+        """Before a multi-start: no stop, the first start's budget unknown, the second start
+        the next to hand out (the first is the solving process's), none taken."""
         self.stop.clear()
         self.seconds.value = 0.0
         self.budget.value = _UNKNOWN
+        self.next.value = 1
+        for w in range(len(self.taken)):
+            self.taken[w] = _NONE
+
+    def take(self, total: int, deadline: float, w: int | None) -> int | None:
+        """The next of ``total`` starts, handed out (to worker ``w``, None: the solving
+        process); None when every start is out, or after the stop or the deadline (none is
+        started then, as in turn)."""
+        with self.lock:
+            i = self.next.value
+            if i >= total or self.stop.is_set() or time.monotonic() > deadline:
+                return None
+            self.next.value = i + 1
+            if w is not None:
+                self.taken[w] = i
+            return i
 
 
 @dataclass(frozen=True)
-class _Task:
-    """One start as a worker gets it: its number, guess, parameters and deadline, the
-    further starts' budget rule and the seconds between two progress messages."""
+class _Batch:
+    """The starts of one multi-start as the workers get them: their guesses, parameters and
+    deadline, the further starts' budget rule and the seconds between two progress messages
+    of a start."""
 
-    i: int
-    guess: Guess
+    starts: tuple[Guess, ...]
     p: np.ndarray
     deadline: float
     rule: Rule
     every: float
 
 
-def _over(i: int, shared: _Shared, began: float, waited: list[float]) -> Callable[[], bool]:
-    """Whether start i's fatrop run (which has no iteration callback) should stop, asked by its
-    guard or its helper: the stop event, or the seconds of a further start's budget spent (the
-    seconds it waited at the smallest budget not counted)."""
+def _over(shared: _Shared, began: float, waited: list[float]) -> Callable[[], bool]:
+    """Whether a further start's fatrop run in a worker (which has no iteration callback)
+    should stop, asked by its guard or its helper: the stop event, or the seconds of its
+    budget spent (the seconds it waited at the smallest budget not counted)."""
     def over() -> bool:
         if shared.stop.is_set():
             return True
-        if i == 0 or shared.budget.value in (_UNKNOWN, _UNLIMITED):
+        if shared.budget.value in (_UNKNOWN, _UNLIMITED):
             return False
         return time.perf_counter() - began - waited[0] >= shared.seconds.value
 
     return over
 
 
-def _listener(conn: Connection, task: _Task, shared: _Shared,
-              waited: list[float]) -> Callable[[int, float, float], bool]:
-    """A worker's iteration callback: progress to the solving process at most every
-    ``task.every`` seconds; stop on the stop event, past the deadline, or at the budget of a
-    further start, waiting at the smallest budget until the first start has set it (the
-    seconds waited added to ``waited[0]``: not the start's solver time)."""
-    i, deadline, rule = task.i, task.deadline, task.rule
+def _listener(conn: Connection, i: int, batch: _Batch, shared: _Shared,
+              waited: list[float]) -> Listener:
+    """The iteration callback of further start i in a worker: progress to the solving process
+    at most every ``batch.every`` seconds; stop on the stop event, past the deadline, or at
+    its budget, waiting at the smallest budget until the first start has set it (the seconds
+    waited added to ``waited[0]``: not the start's solver time)."""
+    deadline, rule = batch.deadline, batch.rule
     last = [time.perf_counter()]
     began = last[0]
 
@@ -238,13 +283,11 @@ def _listener(conn: Connection, task: _Task, shared: _Shared,
 
     def listen(iteration: int, objective: float, infeasibility: float) -> bool:
         now = time.perf_counter()
-        if now - last[0] >= task.every:
+        if now - last[0] >= batch.every:
             last[0] = now
             conn.send(("progress", i, (iteration, objective, infeasibility)))
         if stopped():
             return True
-        if i == 0:
-            return False
         if shared.budget.value == _UNKNOWN:  # the first start is still running
             if iteration < rule.least:
                 return False
@@ -264,30 +307,64 @@ def _listener(conn: Connection, task: _Task, shared: _Shared,
     return listen
 
 
-def _serve(conn: Connection, tr: Transcription, shared: _Shared,
-           rescue: Rescue | None) -> None:
-    """A worker's loop: solve each start sent (the first with ``rescue``), answer ``done``
-    with its result or ``error`` with what it raised; end on None, or when the solving
-    process is gone."""
+def watch(where: str, progress: Callable[[str], None], interrupt: Interrupt,
+          budget: Budget | None, deadline: float, every: float,
+          look: Callable[[], None] | None = None
+          ) -> tuple[Listener, Callable[[], bool]]:
+    """A start solved in the solving process: IPOPT's iteration callback, which reports
+    (iteration, objective, infeasibility) to ``progress`` at most every ``every`` seconds and
+    stops once Ctrl-C was pressed, past ``deadline`` (``time.monotonic()``) or once ``budget``
+    (iterations or seconds from now) is spent; and fatrop's ``stop()`` (it has no iteration
+    callback), asked by its guard or its helper: Ctrl-C, or the budget's seconds. Both call
+    ``look()`` first, which reads what the workers sent meanwhile."""
+    last = [time.perf_counter()]
+    began = last[0]
+
+    def listen(iteration: int, objective: float, infeasibility: float) -> bool:
+        if look is not None:
+            look()
+        now = time.perf_counter()
+        if now - last[0] >= every:
+            last[0] = now
+            progress(iteration_line(where, iteration, objective, infeasibility))
+        return interrupt.requested or time.monotonic() > deadline or \
+            (budget is not None and budget.spent(iteration, now - began))
+
+    def stop() -> bool:
+        if look is not None:
+            look()
+        return interrupt.requested or \
+            (budget is not None and time.perf_counter() - began >= budget.seconds)
+
+    return listen, stop
+
+
+def _serve(conn: Connection, w: int, tr: Transcription, shared: _Shared) -> None:
+    """Worker w's loop: for each multi-start sent (a :class:`_Batch`), take its starts not
+    yet handed out one after the other (:meth:`_Shared.take`), say ``start`` as it takes one
+    and ``done`` with its result or ``error`` with what it raised, and ``idle`` once none is
+    left; end on None, or when the solving process is gone."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the solving process's
     while True:
         while not conn.poll(1.0):
             if os.getppid() != shared.parent:
                 return
-        task: _Task | None = conn.recv()
-        if task is None:
+        batch: _Batch | None = conn.recv()
+        if batch is None:
             return
-        i = task.i
-        waited = [0.0]
-        try:
-            r = tr.solve(task.guess, task.p, _listener(conn, task, shared, waited),
-                         task.deadline, _over(i, shared, time.perf_counter(), waited),
-                         rescue if i == 0 else None)
-            if i > 0:
-                r = budgeted(r, task.deadline, shared.stop.is_set())
-            conn.send(("done", i, replace(r, solve_seconds=r.solve_seconds - waited[0])))
-        except Exception as err:  # noqa: BLE001  (reported as a failed start)
-            conn.send(("error", i, f"{type(err).__name__}: {err}"))
+        while (i := shared.take(len(batch.starts), batch.deadline, w)) is not None:
+            conn.send(("start", i, None))
+            waited = [0.0]
+            try:
+                r = tr.solve(batch.starts[i], batch.p,
+                             _listener(conn, i, batch, shared, waited), batch.deadline,
+                             _over(shared, time.perf_counter(), waited))
+                r = budgeted(r, batch.deadline, shared.stop.is_set())
+                conn.send(("done", i, replace(r, solve_seconds=r.solve_seconds - waited[0])))
+            except Exception as err:  # noqa: BLE001  (reported as a failed start)
+                conn.send(("error", i, f"{type(err).__name__}: {err}"))
+            shared.taken[w] = _NONE
+        conn.send(("idle", _NONE, None))
 
 
 def _failed(tr: Transcription, guess: Guess, p: np.ndarray, why: str) -> RawResult:
@@ -299,25 +376,23 @@ def _failed(tr: Transcription, guess: Guess, p: np.ndarray, why: str) -> RawResu
 
 @dataclass
 class _Pool:
-    """Worker processes forked from the solving process (``owner``) for one transcription
-    and rescue, kept between multi-starts (module docstring)."""
+    """Worker processes forked from the solving process (``owner``) for one transcription,
+    kept between multi-starts (module docstring)."""
 
     owner: int
     tr: Transcription
-    rescue: Rescue | None
     shared: _Shared
     conns: list[Connection]
     procs: list[Any]
 
-    def serves(self, tr: Transcription, workers: int, rescue: Rescue | None) -> bool:
-        """Whether these workers, all alive, can solve the starts of ``tr`` with ``rescue``
-        on ``workers`` processes."""
-        return (self.owner == os.getpid() and self.tr is tr and self.rescue is rescue
-                and len(self.procs) == workers and all(p.is_alive() for p in self.procs))
+    def serves(self, tr: Transcription, workers: int) -> bool:
+        """Whether these workers, all alive, can solve the starts of ``tr`` as ``workers``
+        processes."""
+        return (self.owner == os.getpid() and self.tr is tr and len(self.procs) == workers
+                and all(p.is_alive() for p in self.procs))
 
-    def close(self) -> None:
-        """End the workers: stop their starts, tell them to end, kill those still running
-        after :data:`GRACE` seconds."""
+    def end(self) -> None:
+        """Tell the workers to end (their starts stopped), without waiting for them."""
         if self.owner != os.getpid():  # a copy in a forked child: not its workers
             return
         self.shared.stop.set()
@@ -327,6 +402,12 @@ class _Pool:
                     conn.send(None)
                 except OSError:
                     pass
+
+    def join(self) -> None:
+        """Wait for the workers told to end, killing those still running after
+        :data:`GRACE` seconds."""
+        if self.owner != os.getpid():
+            return
         end = time.monotonic() + GRACE
         for proc in self.procs:
             proc.join(max(0.0, end - time.monotonic()))
@@ -336,44 +417,68 @@ class _Pool:
         for conn in self.conns:
             conn.close()
 
+    def close(self) -> None:
+        """End the workers and wait until they have."""
+        self.end()
+        self.join()
+
+    def ended(self) -> bool:
+        """Whether every worker has ended (then its pipes are closed)."""
+        if any(proc.is_alive() for proc in self.procs):
+            return False
+        self.join()
+        return True
+
 
 _kept: _Pool | None = None  # the workers of the last multi-start, if kept
+#: workers told to end and not waited for (:func:`_retire`): joined by :func:`close`
+_ending: list[_Pool] = []
 
 
 def close() -> None:
     """End the worker processes the last multi-start kept for the next one, if any
-    (:mod:`ocgroupoid.solve.parallel`): after a change in this process they should see (what a
-    Python hook of the problem reads), or to free them; the next multi-start forks new ones."""
+    (:mod:`ocgroupoid.solve.parallel`), and wait until they have: after a change in this
+    process they should see (what a Python hook of the problem reads), or to free them; the
+    next multi-start forks new ones."""
+    _retire()
+    while _ending:
+        _ending.pop().join()
+
+
+def _retire() -> None:
+    """Tell the kept workers to end without waiting for them: a multi-start that forks its
+    own does not wait for the exit of the last one's (5-7 ms for so3's, measured
+    2026-12-04). Workers that have ended meanwhile are joined."""
     global _kept
     pool, _kept = _kept, None
     if pool is not None:
-        pool.close()
+        pool.end()
+        _ending.append(pool)
+    _ending[:] = [p for p in _ending if not p.ended()]
 
 
 atexit.register(close)
 
 
-def _pool(tr: Transcription, workers: int, rescue: Rescue | None) -> _Pool:
-    """The kept workers when they serve ``tr`` and ``rescue`` on ``workers`` processes, ready
-    for a multi-start; else (the kept ones ended) ``workers`` new ones."""
+def _pool(tr: Transcription, workers: int) -> _Pool:
+    """The kept workers when they serve ``tr`` as ``workers`` processes, ready for a
+    multi-start; else (the kept ones ended) ``workers`` new ones."""
     global _kept
-    if _kept is not None and _kept.serves(tr, workers, rescue):
+    if _kept is not None and _kept.serves(tr, workers):
         pool, _kept = _kept, None
         pool.shared.reset()
         return pool
-    close()
+    _retire()
     ctx = mp.get_context("fork")
     for backend in tr.backends:  # IPOPT's instance with the iteration callback, built once
         if isinstance(backend, IpoptBackend):  # here for every worker (else in each)
             backend.watched_solver  # noqa: B018
-    shared = _Shared(ctx.Event(), ctx.RawValue("q", _UNKNOWN), ctx.RawValue("d", 0.0),
-                     os.getpid())
-    pool = _Pool(os.getpid(), tr, rescue, shared, [], [])
+    pool = _Pool(os.getpid(), tr, _Shared.make(ctx, workers), [], [])
     with warnings.catch_warnings():  # a multi-threaded caller: the workers have one thread
         warnings.simplefilter("ignore", DeprecationWarning)
-        for _ in range(workers):
+        for w in range(workers):
             mine, theirs = ctx.Pipe()
-            proc = ctx.Process(target=_serve, args=(theirs, tr, shared, rescue), daemon=True)
+            proc = ctx.Process(target=_serve, args=(theirs, w, tr, pool.shared), daemon=True)
             proc.start()
             theirs.close()
             pool.conns.append(mine)
@@ -385,96 +490,111 @@ def run(tr: Transcription, starts: Sequence[Guess], p: np.ndarray, workers: int,
         where: Callable[[int], str], progress: Callable[[str], None], interrupt: Interrupt,
         deadline: float, rule: Rule, every: float, rescue: Rescue | None = None
         ) -> tuple[list[RawResult], list[dict[str, Any]]]:
-    """Solve ``starts`` on ``workers`` forked processes (module docstring): the results of
-    the starts that ran, in their order, and the starts that failed in a worker (number from
-    1, label, error). ``where(i)`` names start i for ``progress``, which hears each start as
-    it is handed out and as it finishes, and the workers' iterations; ``rule`` is the
-    further starts' budget, ``every`` the seconds between two progress messages
-    of a start. The workers are kept for the next multi-start when every start ran and
-    none was stopped (:func:`close` ends them)."""
+    """Solve ``starts`` on ``workers`` processes, this one and ``workers - 1`` forked ones
+    (module docstring): the results of the starts that ran, in their order, and the starts
+    that failed in a worker (number from 1, label, error). This process solves the first
+    start (with ``rescue``), then takes the next start not handed out, as the workers do,
+    until none is left; ``where(i)`` names start i for ``progress``, which hears each start
+    as it is handed out and as it finishes, and the iterations of every start; ``rule`` is
+    the further starts' budget, ``every`` the seconds between two progress messages of a
+    start. The workers are kept for the next multi-start when every start ran and none was
+    stopped (:func:`close` ends them)."""
     global _kept
-    pool = _pool(tr, workers, rescue)
+    pool = _pool(tr, workers - 1)
     shared, conns, procs = pool.shared, pool.conns, pool.procs
     failed: list[dict[str, Any]] = []
     results: dict[int, RawResult] = {}
-    todo = list(range(len(starts)))
-    running: dict[int, int] = {}  # worker -> the start it solves
+    busy = set(range(len(procs)))  # the workers still on this multi-start
+    batch = _Batch(tuple(starts), p, deadline, rule, every)
+    for conn in conns:
+        try:
+            conn.send(batch)
+        except OSError:  # it died: its sentinel says so
+            pass
 
     def fail(i: int, why: str) -> None:
         results[i] = _failed(tr, starts[i], p, why)
         failed.append({"start": i + 1, "label": starts[i].label, "error": why})
         progress(f"{where(i)}: failed in its worker ({why})")
 
+    def done(i: int, r: RawResult) -> None:
+        results[i] = timed(r, deadline)
+        progress(f"{len(results)}/{len(starts)} starts done; {where(i)}: {r.status}")
+
+    def look(seconds: float = 0.0) -> None:
+        """Read what the busy workers sent, waiting up to ``seconds`` for the first word."""
+        if not busy:
+            return
+        ready = wait([conns[w] for w in busy] + [procs[w].sentinel for w in busy], seconds)
+        for w in sorted(busy):
+            if conns[w] in ready or procs[w].sentinel in ready:
+                _receive(w, conns[w], procs[w], shared, busy, results, done, fail, where,
+                         progress)
+
+    clean = False
     try:
-        while todo or running:
-            alive = [w for w, proc in enumerate(procs) if proc.is_alive()]
-            for w in alive:
-                if w not in running and todo:
-                    i = todo.pop(0)
-                    progress(where(i))
-                    running[w] = i
-                    try:
-                        conns[w].send(_Task(i, starts[i], p, deadline, rule, every))
-                    except OSError:  # it died: its sentinel says so below
-                        pass
-            if not alive:  # every worker died: what is left cannot run
-                for i in todo:
-                    fail(i, "not run: every worker process died")
-                todo.clear()
-            if interrupt.requested or time.monotonic() > deadline:  # the first start ran
+        i: int | None = 0
+        budget: Budget | None = None  # of a further start
+        while i is not None:
+            progress(where(i))
+            listen, stop = watch(where(i), progress, interrupt, budget, deadline, every, look)
+            r = tr.solve(starts[i], p, listen, deadline, stop, rescue if i == 0 else None)
+            done(i, budgeted(r, deadline, interrupt.requested) if i > 0 else r)
+            if i == 0:
+                _settle(shared, rule, results[0])
+                budget = budget_after(results[0], rule)
+            if interrupt.requested or time.monotonic() > deadline:
                 shared.stop.set()
-                todo.clear()
-            ready = wait([conns[w] for w in running] + [procs[w].sentinel for w in running],
-                         POLL)
-            for w in list(running):
-                if conns[w] in ready or procs[w].sentinel in ready:
-                    _receive(w, conns[w], procs[w], running, results, shared, fail, where,
-                             progress, deadline, len(starts), rule)
+            i = shared.take(len(starts), deadline, None)
+        while busy:
+            if interrupt.requested or time.monotonic() > deadline:
+                shared.stop.set()
+            look(POLL)
+        clean = True
     finally:
-        if running or shared.stop.is_set() or failed:
+        if not clean or shared.stop.is_set() or failed:
             pool.close()
         else:
-            close()  # another thread's workers, kept meanwhile: one set at a time
+            _retire()  # another thread's workers, kept meanwhile: one set at a time
             _kept = pool
     return [results[i] for i in sorted(results)], failed
 
 
-def _receive(w: int, conn: Connection, proc: Any, running: dict[int, int],
-             results: dict[int, RawResult], shared: _Shared, fail: Callable[[int, str], None],
-             where: Callable[[int], str], progress: Callable[[str], None], deadline: float,
-             total: int, rule: Rule) -> None:
-    """Read what worker w sent: progress, its start's result or error; or see it dead."""
-    i = running[w]
+def _receive(w: int, conn: Connection, proc: Any, shared: _Shared, busy: set[int],
+             results: dict[int, RawResult], done: Callable[[int, RawResult], None],
+             fail: Callable[[int, str], None], where: Callable[[int], str],
+             progress: Callable[[str], None]) -> None:
+    """Read what worker w sent: a start it took, progress, a start's result or error, that
+    it is idle; or see it dead, and its start, if it had one, failed."""
     while conn.poll():
         try:
-            kind, j, value = conn.recv()
+            kind, i, value = conn.recv()
         except (EOFError, OSError):
             break
-        if kind == "progress":
-            progress(iteration_line(where(j), *value))
-            continue
-        del running[w]
-        if kind == "error":
-            fail(j, value)
-        else:
-            r: RawResult = timed(value, deadline)
-            results[j] = r
-            progress(f"{len(results)}/{total} starts done; {where(j)}: {r.status}")
-        _settle(shared, rule, j, results.get(j))
-        return
+        if kind == "start":
+            progress(where(i))
+        elif kind == "progress":
+            progress(iteration_line(where(i), *value))
+        elif kind == "error":
+            fail(i, value)
+        elif kind == "done":
+            done(i, value)
+        else:  # idle: none of this multi-start's starts left
+            busy.discard(w)
+            return
     if not proc.is_alive():
-        del running[w]
-        code = proc.exitcode
-        fail(i, "its worker process died (" + (f"signal {-code}" if code is not None and
-                                                code < 0 else f"exit code {code}") + ")")
-        _settle(shared, rule, i, None)
+        busy.discard(w)
+        i = shared.taken[w]
+        if i != _NONE and i not in results:
+            code = proc.exitcode
+            fail(i, "its worker process died (" + (f"signal {-code}" if code is not None and
+                                                   code < 0 else f"exit code {code}") + ")")
 
 
-def _settle(shared: _Shared, rule: Rule, i: int, r: RawResult | None) -> None:
+def _settle(shared: _Shared, rule: Rule, first: RawResult) -> None:
     """Once the first start has ended: the further starts' budget (:func:`budget_after`;
     none when it failed), as in turn."""
-    if i == 0:
-        budget = None if r is None else budget_after(r, rule)
-        if budget is not None:
-            shared.seconds.value = budget.seconds  # before the iterations, which workers poll
-        shared.budget.value = _UNLIMITED if budget is None else budget.iterations
+    budget = budget_after(first, rule)
+    if budget is not None:
+        shared.seconds.value = budget.seconds  # before the iterations, which workers poll
+    shared.budget.value = _UNLIMITED if budget is None else budget.iterations
