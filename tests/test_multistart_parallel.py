@@ -151,6 +151,27 @@ def test_the_solving_process_solves_the_first_start_and_takes_its_share(monkeypa
     parallel.close()
 
 
+def test_an_error_in_the_solving_processs_start_is_raised_and_ends_the_workers(
+        monkeypatch) -> None:
+    """A start that raises in the solving process raises, as in turn; its worker, busy with
+    the other starts, is ended, not kept."""
+    import multiprocessing
+
+    solve = Transcription.solve
+    here = os.getpid()
+
+    def faulty(self, guess, *args, **kwargs):
+        if os.getpid() == here and guess.label == "geodesic":
+            time.sleep(0.2)  # the worker is on its starts meanwhile
+            raise RuntimeError("broken first start")
+        return solve(self, guess, *args, **kwargs)
+
+    monkeypatch.setattr(Transcription, "solve", faulty)
+    with pytest.raises(RuntimeError, match="broken first start"):
+        og.compile_problem(rigid_body(), N=16, workers=2).solve(multistart=3)
+    assert parallel._kept is None and not multiprocessing.active_children()
+
+
 def test_starts_are_handed_out_once_and_in_order() -> None:
     """Two processes taking starts at once get each start once, in increasing order each;
     none after the stop or the deadline; reset hands out from the second start again."""
