@@ -6,8 +6,9 @@ IPOPT (fatrop failed), IPOPT's status, iterations and time, and the relative dif
 the two costs. Both backends run from the same start (the first geodesic guess) on the one
 NLP, with the file's solver options. Then the build of each backend (its ``casadi.nlpsol``
 and, for fatrop, the stage form and its Functions) on ``so3_rest_to_rest`` at N = 256, 512
-and 1024, on CasADi's virtual machine and with jit: fatrop's must grow linearly in N, as
-IPOPT's (with jit it runs through its own C interface).
+and 1024, on CasADi's virtual machine and with jit, and the whole build a solve waits for
+(the transcription with each backend): fatrop's must grow linearly in N, as IPOPT's, and
+stay within 3 times IPOPT's.
 
 Writes ``bench_fatrop.json`` and ``bench_fatrop.png`` (iterations of both against N, one
 panel per file and scheme; build times against N).
@@ -16,6 +17,7 @@ panel per file and scheme; build times against N).
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -27,6 +29,7 @@ from ocgroupoid.nlp.backends.base import ACCEPTABLE
 from ocgroupoid.nlp.method import Method
 from ocgroupoid.nlp.options import SolverOptions
 from ocgroupoid.nlp.program import NonlinearProgram
+from ocgroupoid.nlp.transcription import Transcription
 from ocgroupoid.solve import compile_problem
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -81,7 +84,10 @@ def build_times(N: int) -> dict[str, Any]:
     """The construction of each backend on the one NLP of so3_rest_to_rest (seconds): on
     CasADi's virtual machine, and with jit from a warm cache (the library compiled by an
     untimed build before; the best of three), where fatrop runs through its own C interface
-    (``fatrop_ocp``) instead of CasADi's nlpsol."""
+    (``fatrop_ocp``) instead of CasADi's nlpsol. Then the whole build a solve waits for, the
+    :class:`~ocgroupoid.nlp.transcription.Transcription` with each backend (the stage graphs
+    and the NLP's assembly, which IPOPT's backend gets built and fatrop's repeats in stage
+    form; fatrop's has IPOPT's beside it, its fallback), the best of three each way."""
     cfg = files.load(PROBLEMS / "so3_rest_to_rest.yaml", [f"horizon.N={N}"])
     d = cfg.file.discretization
     nlp = NonlinearProgram(files.build(cfg), Method(N, scheme=d.scheme,
@@ -101,6 +107,19 @@ def build_times(N: int) -> dict[str, Any]:
         row[f"{cls.name}_jit_build_seconds"] = min(times)
     row["ratio"] = row["fatrop_build_seconds"] / row["ipopt_build_seconds"]
     row["jit_ratio"] = row["fatrop_jit_build_seconds"] / row["ipopt_jit_build_seconds"]
+    problem, method = files.build(cfg), files.method(cfg)
+    for backend in ("ipopt", "fatrop"):  # the whole build a solve waits for
+        for jit, key in ((False, "whole"), (True, "whole_jit")):
+            options = replace(files.options(cfg), backend=backend, jit=jit)
+            Transcription(problem, method, options)  # with jit: the library compiled
+            times = []
+            for _ in range(3):
+                t0 = time.perf_counter()
+                Transcription(problem, method, options)
+                times.append(time.perf_counter() - t0)
+            row[f"{backend}_{key}_seconds"] = min(times)
+    for key in ("whole", "whole_jit"):
+        row[f"{key}_ratio"] = row[f"fatrop_{key}_seconds"] / row[f"ipopt_{key}_seconds"]
     return row
 
 
@@ -191,6 +210,10 @@ def main() -> None:
               f"{b['fatrop_build_seconds']:6.2f} s ({b['ratio']:.1f}x); with jit (warm): "
               f"ipopt {b['ipopt_jit_build_seconds']:6.2f} s, fatrop "
               f"{b['fatrop_jit_build_seconds']:6.2f} s ({b['jit_ratio']:.1f}x)")
+        print(f"  whole build N={b['N']:5d}: ipopt {b['ipopt_whole_seconds']:6.2f} s, fatrop "
+              f"{b['fatrop_whole_seconds']:6.2f} s ({b['whole_ratio']:.1f}x); with jit (warm): "
+              f"ipopt {b['ipopt_whole_jit_seconds']:6.2f} s, fatrop "
+              f"{b['fatrop_whole_jit_seconds']:6.2f} s ({b['whole_jit_ratio']:.1f}x)")
 
 
 if __name__ == "__main__":
