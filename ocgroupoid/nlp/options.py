@@ -69,8 +69,9 @@ class SolverOptions:
     #: in increasing order), then other schemes on the final grid (names, in the order
     #: given; e.g. ``("order2",)`` before an ``order4`` solve)
     continuation: tuple[int | str, ...] = ()
-    #: the processes a multi-start solves its starts on (:mod:`~ocgroupoid.solve.parallel`):
-    #: None, one per core; 1, one start after the other in this process
+    #: the processes a multi-start solves its starts on, this one among them
+    #: (:mod:`~ocgroupoid.solve.parallel`): None, one per core; 1, one start after the other
+    #: in this process
     workers: int | None = None
 
     def __post_init__(self) -> None:
