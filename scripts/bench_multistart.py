@@ -99,7 +99,11 @@ def cold(name: str, perturbed: int, pairs: int, N: int | None, step) -> dict:
                  f"{r + 1}/{pairs}")
             out = subprocess.run([sys.executable, "-c", ONCE, str(ROOT / "problems" /
                                   f"{name}.yaml"), str(perturbed), str(w), str(N or 0)],
-                                 capture_output=True, text=True, check=True)
+                                 capture_output=True, text=True)
+            if out.returncode != 0:
+                raise SystemExit(f"{name}: the multi-start in a fresh process (workers={w}) "
+                                 f"failed with exit code {out.returncode}:\n"
+                                 f"{out.stderr.strip()[-2000:]}")
             walls[w].append(json.loads(out.stdout.splitlines()[-1])["wall_seconds"])
     seq, par = statistics.median(walls[1]), statistics.median(walls[WORKERS])
     return {"cold_processes": pairs, "cold_sequential_wall_seconds": seq,
@@ -108,8 +112,8 @@ def cold(name: str, perturbed: int, pairs: int, N: int | None, step) -> dict:
 
 def figure(rows: list[dict], path: Path) -> None:
     """Wall time in turn and in parallel, per case."""
-    fig, ax = plt.subplots(figsize=(8, 4))
-    labels = [f"{r['problem']}\n{r['starts']} starts" for r in rows]
+    fig, ax = plt.subplots(figsize=(max(8.0, 1.2 * len(rows)), 4))
+    labels = [f"{r['problem'].replace('_', ' ')}\n{r['starts']} starts" for r in rows]
     xs = range(len(rows))
     ax.bar([x - 0.2 for x in xs], [r["sequential_wall_seconds"] for r in rows], 0.4,
            label="in turn (workers=1)")

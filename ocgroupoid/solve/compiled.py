@@ -342,8 +342,8 @@ class CompiledProblem:
     def _through(self, tr: Transcription, name: str, pack: tuple[Any, ...]) -> Rescue:
         """The rescue of a start fatrop failed on (:func:`~ocgroupoid.nlp.backends.in_turn`,
         before IPOPT's fallback): fatrop on the scheme ``name`` (order2) on the same grid from
-        the start's velocities (built on first use, in the solving process), then fatrop again from
-        its solution; the run in ``tr``'s variables. Both runs are fatrop's alone, with
+        the start's velocities (built on first use, in the solving process), then fatrop again
+        from its solution; the run in ``tr``'s variables. Both runs are fatrop's alone, with
         :data:`RESCUE_ITERATIONS`: where they fail the start is hopeless more often than not,
         and IPOPT's fallback follows anyway. Not after fatrop ran out of iterations: that is a
         crawl near a solution (quadrotor_min_time, N = 256, before fatrop's acceptable stop:
