@@ -6,9 +6,9 @@ IPOPT (fatrop failed), IPOPT's status, iterations and time, and the relative dif
 the two costs. Both backends run from the same start (the first geodesic guess) on the one
 NLP, with the file's solver options. Then the build of each backend (its ``casadi.nlpsol``
 and, for fatrop, the stage form and its Functions) on ``so3_rest_to_rest`` at N = 256, 512
-and 1024, on CasADi's virtual machine and with jit, and the whole build a solve waits for
-(the transcription with each backend): fatrop's must grow linearly in N, as IPOPT's, and
-stay within 3 times IPOPT's.
+and 1024, on CasADi's virtual machine and with jit, the whole build a solve waits for (the
+transcription with each backend) and the export of the C solver: fatrop's must grow linearly
+in N, as IPOPT's, and stay within 3 times IPOPT's.
 
 Writes ``bench_fatrop.json`` and ``bench_fatrop.png`` (iterations of both against N, one
 panel per file and scheme; build times against N).
@@ -16,6 +16,7 @@ panel per file and scheme; build times against N).
 
 from __future__ import annotations
 
+import tempfile
 import time
 from dataclasses import replace
 from pathlib import Path
@@ -24,6 +25,7 @@ from typing import Any
 from ocgroupoid import files
 from ocgroupoid.bench.record import write_summary
 from ocgroupoid.bench.script import arguments, steps
+from ocgroupoid.export.codegen import export_c
 from ocgroupoid.nlp.backends import FatropBackend, IpoptBackend, Start
 from ocgroupoid.nlp.backends.base import ACCEPTABLE
 from ocgroupoid.nlp.method import Method
@@ -87,7 +89,9 @@ def build_times(N: int) -> dict[str, Any]:
     (``fatrop_ocp``) instead of CasADi's nlpsol. Then the whole build a solve waits for, the
     :class:`~ocgroupoid.nlp.transcription.Transcription` with each backend (the stage graphs
     and the NLP's assembly, which IPOPT's backend gets built and fatrop's repeats in stage
-    form; fatrop's has IPOPT's beside it, its fallback), the best of three each way."""
+    form; fatrop's has IPOPT's beside it, its fallback), the best of three each way; and the
+    export of the C solver with each backend (``export_c`` without building the C), the best
+    of two."""
     cfg = files.load(PROBLEMS / "so3_rest_to_rest.yaml", [f"horizon.N={N}"])
     d = cfg.file.discretization
     nlp = NonlinearProgram(files.build(cfg), Method(N, scheme=d.scheme,
@@ -118,7 +122,17 @@ def build_times(N: int) -> dict[str, Any]:
                 Transcription(problem, method, options)
                 times.append(time.perf_counter() - t0)
             row[f"{backend}_{key}_seconds"] = min(times)
-    for key in ("whole", "whole_jit"):
+    with tempfile.TemporaryDirectory() as tmp:  # the export of the C solver (no C build)
+        for backend in ("ipopt", "fatrop"):
+            options = replace(files.options(cfg), backend=backend, jit=False)
+            times = []
+            for k in range(2):
+                t0 = time.perf_counter()
+                export_c(problem, Path(tmp) / f"{backend}{k}", method=method, options=options,
+                         mpc=False)
+                times.append(time.perf_counter() - t0)
+            row[f"{backend}_export_seconds"] = min(times)
+    for key in ("whole", "whole_jit", "export"):
         row[f"{key}_ratio"] = row[f"fatrop_{key}_seconds"] / row[f"ipopt_{key}_seconds"]
     return row
 
@@ -214,6 +228,8 @@ def main() -> None:
               f"{b['fatrop_whole_seconds']:6.2f} s ({b['whole_ratio']:.1f}x); with jit (warm): "
               f"ipopt {b['ipopt_whole_jit_seconds']:6.2f} s, fatrop "
               f"{b['fatrop_whole_jit_seconds']:6.2f} s ({b['whole_jit_ratio']:.1f}x)")
+        print(f"  export N={b['N']:5d}: ipopt {b['ipopt_export_seconds']:6.2f} s, fatrop "
+              f"{b['fatrop_export_seconds']:6.2f} s ({b['export_ratio']:.1f}x)")
 
 
 if __name__ == "__main__":

@@ -473,6 +473,45 @@ def test_exported_folder_layout_and_parameter_file(tmp_path: Path) -> None:
     assert (exp.folder / "params.txt").read_text().count("\ninitial.R ") == 1
 
 
+def test_a_fatrop_export_runs_the_driver_not_casadis_nlpsol(tmp_path: Path,
+                                                            monkeypatch) -> None:
+    """With solver.backend fatrop the export writes fatrop's driver and its tables, in time
+    linear in N, and builds no fatrop nlpsol of CasADi's (whose build grows as N²): the
+    solvers are the driver's, no warm twin is generated, and the README names the files."""
+    import casadi as ca
+
+    plugins: list[str] = []
+    nlpsol = ca.nlpsol
+
+    def recorded(name, plugin, *args, **kwargs):
+        plugins.append(plugin)
+        return nlpsol(name, plugin, *args, **kwargs)
+
+    monkeypatch.setattr(ca, "nlpsol", recorded)
+    exp = export_c(_rigid_body(), tmp_path / "c", N=4, backend="fatrop")
+    assert exp.solver.transcription.backend == "fatrop"
+    assert "fatrop" not in plugins and "ipopt" in plugins  # IPOPT: the Python fallback's
+    names = {p.name for p in exp.folder.iterdir()}
+    assert {"ocg_fatrop_solver.c", "ocg_fatrop_solver.h", "ocg_fatrop_ocp.c",
+            "ocg_fatrop_ocp.h", "ocg_fatrop_guard.c", "ocg_fatrop_guard.h"} <= names
+    assert not any("generated_warm" in n for n in names)
+    driver = (exp.folder / "ocg_fatrop_ocp.c").read_text()
+    assert '#include "ocg_fatrop_ocp.h"' in driver and "void ocg_fatrop_solve(" in driver
+    readme = (exp.folder / "README.md").read_text()
+    assert "`ocg_fatrop_solver.c/.h`" in readme and "generated_warm" not in readme
+    assert "@" not in readme
+    makefile = (exp.folder / "Makefile").read_text()
+    assert "ocg_fatrop_ocp.o" in makefile and "generated_warm" not in makefile
+
+
+def test_a_fatrop_export_refuses_options_c_cannot_hold(tmp_path: Path) -> None:
+    """A non-finite fatrop option would be no C literal: the export says which, and how."""
+    with pytest.raises(ExportError, match="fatrop's option tol_acceptable = inf"):
+        export_c(og.compile_problem(_rigid_body(), N=4, backend="fatrop",
+                                    fatrop={"tol_acceptable": float("inf")}),
+                 tmp_path / "c")
+
+
 @needs_cc
 def test_cli_export_c_builds_a_runnable_solver(tmp_path: Path) -> None:
     out = tmp_path / "so3"

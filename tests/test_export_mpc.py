@@ -174,6 +174,24 @@ def test_c_shrinking_loop_applies_pythons_controls(
     assert [s["iterations"] for s in c["steps"]] == [s.iterations for s in py.steps]
 
 
+def test_a_fatrop_export_runs_the_loop_as_python_does(problem: og.Problem,
+                                                      tmp_path: Path) -> None:
+    """With solver.backend fatrop the C loop re-solves through fatrop's driver, warm started
+    from the last plan's primal point and keeping fatrop's solver from sample to sample: its
+    controls and plant states are Python's fatrop loop's to 1e-8, every step solved."""
+    done = export_c(problem, tmp_path / "c", N=N, build=True, cflags=CFLAGS, mpc=True,
+                    backend="fatrop")
+    assert done.mpc is not None and (tmp_path / "c" / "ocg_fatrop_ocp.c").is_file()
+    r = subprocess.run([str(done.mpc), "--steps", str(STEPS), "--mismatch", "inertia=1.05"],
+                       capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    c = json.loads(r.stdout)
+    py = og.mpc(problem, N, STEPS, mismatch=MISMATCH, backend="fatrop")
+    assert_same_path(py, c)
+    assert c["summary"]["failed_steps"] == 0 == py.failed_steps
+    assert {s["status"] for s in c["steps"]} == {"Solve_Succeeded"}
+
+
 def test_c_driver_refuses_bad_input(driver: Path) -> None:
     """An unknown parameter, a bad factor, horizon or count: exit 2 and a message saying
     what to write."""

@@ -11,6 +11,7 @@ import shutil
 import subprocess
 from pathlib import Path
 
+import numpy as np
 import pytest
 from typer.testing import CliRunner
 
@@ -26,6 +27,7 @@ from ocgroupoid.export.codegen import (
     plain_name,
     positive_parameters,
 )
+from ocgroupoid.export.literals import c_ints, c_string
 from ocgroupoid.files import source
 from ocgroupoid.systems import MODELS
 from ocgroupoid.systems.rigid_body import rigid_body
@@ -172,11 +174,20 @@ def test_export_c_checks_its_folder_before_compiling(tmp_path: Path, monkeypatch
 
 
 def test_names_are_escaped_for_c_and_reduced_for_comments() -> None:
-    assert codegen._c_string('a"b\\c\n??/ü') == '"a\\"b\\\\c\\012\\?\\?/\\303\\274"'
+    assert c_string('a"b\\c\n??/ü') == '"a\\"b\\\\c\\012\\?\\?/\\303\\274"'
     plain = plain_name("x\n$(shell rm -rf ~) */ #\\")
     assert "\n" not in plain and "$" not in plain and "*/" not in plain
     assert "\\" not in plain and "#" not in plain
     assert codegen._fill("@A@ @B@", {"A": "@B@", "B": "b"}) == "@B@ b"
+
+
+def test_long_int_arrays_are_wrapped_and_never_empty() -> None:
+    """C has no empty initializer; a long one is 16 numbers a line."""
+    assert c_ints(np.array([], dtype=int)) == "0"
+    text = c_ints(np.arange(40))
+    lines = text.split("\n")
+    assert len(lines) == 3 and lines[0].count(",") == 16
+    assert [int(v) for v in text.replace("\n", "").split(",")] == list(range(40))
 
 
 @needs_cc

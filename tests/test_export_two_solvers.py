@@ -1,7 +1,8 @@
-"""Two exported solvers of different problems in one C program (issue 25): exported with the
-prefixes ``so3_`` and ``top_``, their libraries link side by side (no name of one is a name of
-the other) and, called alternately (A, B, A, B, each with a warm start), they give bit for bit
-what each gives alone, and what Python gives.
+"""Exported solvers of different problems in one C program (issue 25): exported with the
+prefixes ``so3_``, ``top_`` (both IPOPT) and ``ball_`` (fatrop, whose export carries its
+driver), their libraries link side by side (no name of one is a name of another) and, called
+in turn (A, B, C, A, B, C, each with a warm start), they give bit for bit what each gives
+alone, and what Python gives.
 
 One export of each (N = 16), each library built once, one combined program built once.
 """
@@ -23,8 +24,9 @@ from .cbuild import CFLAGS
 
 ROOT = Path(__file__).resolve().parent.parent
 N_TEST = 16
-#: prefix -> problem file
-EXPORTS = {"so3_": "so3_rest_to_rest", "top_": "heavy_top_rotors"}
+#: prefix -> problem file (with its own backend)
+EXPORTS = {"so3_": "so3_rest_to_rest", "top_": "heavy_top_rotors", "ball_": "plate_ball"}
+BACKENDS = {"so3_": "ipopt", "top_": "ipopt", "ball_": "fatrop"}
 
 pytestmark = pytest.mark.skipif(shutil.which("cc") is None or shutil.which("make") is None,
                                 reason="no C compiler (cc) or make on PATH")
@@ -39,6 +41,8 @@ PROGRAM = r"""
 #include "so3_solver.h"
 #include "top_model.h"
 #include "top_solver.h"
+#include "ball_model.h"
+#include "ball_solver.h"
 
 static void print_output(const char *name, const char *what, const double *v, size_t n) {
   size_t i;
@@ -76,15 +80,16 @@ static void print_output(const char *name, const char *what, const double *v, si
 
 SOLVES(so3_, SO3_)
 SOLVES(top_, TOP_)
+SOLVES(ball_, BALL_)
 
-/* two: so3 alone; top: top alone; both: so3, top, so3, top */
+/* so3, top or ball: that one alone; all: so3, top, ball, so3, top, ball */
 int main(int argc, char **argv) {
-  const char *which = argc > 1 ? argv[1] : "both";
-  int k;
-  for (k = 0; k < 2; ++k) {
-    if (strcmp(which, "top") != 0 && solve_so3_()) return 2;
-    if (strcmp(which, "so3") != 0 && solve_top_()) return 2;
-    if (strcmp(which, "both") != 0) break;
+  const char *which = argc > 1 ? argv[1] : "all";
+  int all = strcmp(which, "all") == 0, k;
+  for (k = 0; k < (all ? 2 : 1); ++k) {
+    if ((all || strcmp(which, "so3") == 0) && solve_so3_()) return 2;
+    if ((all || strcmp(which, "top") == 0) && solve_top_()) return 2;
+    if ((all || strcmp(which, "ball") == 0) && solve_ball_()) return 2;
   }
   return 0;
 }
@@ -103,14 +108,14 @@ def program(tmp_path_factory) -> tuple[Path, dict]:
         exp = export_c(files.build(cfg), root / name, N_TEST, d.retraction, d.rule, f.ipopt,
                        scheme=d.scheme, backend=f.backend, prefix=prefix)
         libs.append(make(exp.folder, CFLAGS, target="libocg.a"))
-        python[prefix] = exp.solver.solve()
-        assert exp.solver.transcription.backend == "ipopt"
+        python[prefix] = exp.solver.solve(multistart=False)
+        assert exp.solver.transcription.backend == BACKENDS[prefix]
     lib = casadi_dir()
     source, exe = root / "two.c", root / "two"
     source.write_text(PROGRAM)
     cmd = ["cc", *CFLAGS.split(), *[f"-I{p.parent}" for p in libs],
            f"-I{lib / 'include'}", "-o", str(exe), str(source), *map(str, libs),
-           f"-L{lib}", f"-Wl,-rpath,{lib}", *BACKEND_LIBS["ipopt"].split(), "-lm"]
+           f"-L{lib}", f"-Wl,-rpath,{lib}", *BACKEND_LIBS["fatrop"].split(), "-lm"]
     r = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
     assert r.returncode == 0, r.stderr
     return exe, python
@@ -122,16 +127,15 @@ def run(exe: Path, which: str) -> list[str]:
     return r.stdout.splitlines()
 
 
-def test_two_solvers_alternate_as_they_run_alone(program) -> None:
-    """so3, top, so3, top (each a cold solve and a warm start) print what each prints alone,
-    bit for bit (iterations, status, cost, NLP point, states, controls)."""
+def test_solvers_called_in_turn_give_what_they_give_alone(program) -> None:
+    """so3, top, ball, so3, top, ball (each a cold solve and a warm start) print what each
+    prints alone, bit for bit (iterations, status, cost, NLP point, states, controls)."""
     exe, _ = program
-    alone = {"so3_": run(exe, "so3"), "top_": run(exe, "top")}
-    both = run(exe, "both")
-    n = len(alone["so3_"])
-    assert n == 8 and len(alone["top_"]) == n
-    rounds = [both[k * n:(k + 1) * n] for k in range(4)]
-    assert rounds == [alone["so3_"], alone["top_"], alone["so3_"], alone["top_"]]
+    alone = [run(exe, prefix[:-1]) for prefix in EXPORTS]
+    n = len(alone[0])
+    assert n == 8 and all(len(lines) == n for lines in alone)
+    every = run(exe, "all")
+    assert [every[k * n:(k + 1) * n] for k in range(6)] == alone + alone
 
 
 def test_each_solver_in_the_combined_program_is_pythons(program) -> None:

@@ -307,9 +307,6 @@ class Scripted(Backend):
         self.runs += 1
         return Run(start.x0, 1.0, np.zeros(1), np.zeros(1), self.status, self.success, 3, 0.5)
 
-    def graph(self, *args):  # pragma: no cover  (not exported)
-        raise NotImplementedError
-
 
 @pytest.mark.parametrize("first_status, rescued, expected, runs, earlier", [
     ("Fatrop_Failed", True, "fatrop through order2", (1, 1, 0),

@@ -6,13 +6,15 @@ values) except CasADi's own output:
 
 - ``{prefix}generated.c/.h``, ``{prefix}generated_warm.c/.h``: the CasADi-generated
   Functions of :mod:`~ocgroupoid.export.functions` (the solvers, the guess, the packing of a
-  parameter file, the read-out, the verdict's checks), after ``prelude.c.in``;
+  parameter file, the read-out, the verdict's checks), after ``prelude.c.in``; with
+  ``solver.backend: fatrop`` the solvers are fatrop's driver instead (no
+  ``generated_warm``; :mod:`~ocgroupoid.export.fatrop`);
 - the library, one job a file: ``{prefix}solver.c/.h`` the public API, ``{prefix}json.c``
   the JSON writer, ``{prefix}functions.c/.h`` the calls of the generated functions,
-  ``{prefix}hooks.c/.h`` with ``{prefix}ipopt_hooks.h`` and ``{prefix}fatrop_hooks.h`` what
-  the backend reports of a solve, ``{prefix}result.h`` what a result holds,
-  ``{prefix}model.c/.h`` the dimensions and the tables (the ranges of the keys from
-  :mod:`~ocgroupoid.model.ranges`, which the problem files are checked against too);
+  ``{prefix}hooks.c/.h`` with ``{prefix}ipopt_hooks.h`` what the backend reports of a solve,
+  ``{prefix}result.h`` what a result holds, ``{prefix}model.c/.h`` the dimensions and the
+  tables (the ranges of the keys from :mod:`~ocgroupoid.model.ranges`, which the problem
+  files are checked against too);
 - the driver: ``main.c`` and ``{prefix}params.c/.h`` (the parameter-file reader);
   ``params.txt`` the exported instance; ``Makefile`` and ``README.md``.
 
@@ -35,7 +37,7 @@ import json
 import re
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any, Collection, Sequence
+from typing import Any, Collection
 
 import casadi as ca
 import numpy as np
@@ -61,22 +63,33 @@ from ..nlp.transcription import Transcription
 from ..solve.compiled import CompiledProblem
 from ..solve.outputs import write_atomic
 from ..verify.graph import CHECKS, FIGURES
-from . import mpc as closed_loop
+from . import fatrop as exported_fatrop, mpc as closed_loop
 from .build import casadi_dir, ipopt_paths, make  # noqa: F401  (casadi_dir: the export API)
 from .folder import MANIFEST, claim_folder, digest, manifest
 from .functions import CHECK_FAILURES, generate
+from .literals import c_double, c_doubles, c_names, c_string
 
 TEMPLATES = Path(__file__).resolve().parent / "c_templates"
 #: the exported files rendered from c_templates/NAME.in, named with the prefix
 #: (``{prefix}solver.c`` from ``solver.c.in``; main.c keeps its name)
 PREFIXED = ("solver.h", "solver.c", "result.h", "json.c", "functions.h", "functions.c",
-            "hooks.h", "hooks.c", "ipopt_hooks.h", "fatrop_hooks.h", "model.h", "model.c",
+            "hooks.h", "hooks.c", "ipopt_hooks.h", "model.h", "model.c",
             "params.h", "params.c")
 #: the prefix of every symbol, macro (upper case) and file of an export unless told
 DEFAULT_PREFIX = "ocg_"
 _PREFIX = re.compile(r"[a-z][a-z0-9_]*_")
 #: the libraries each backend links with (all in the casadi wheel)
 BACKEND_LIBS = {"ipopt": "-lipopt", "fatrop": "-lipopt -lfatrop -lblasfeo"}
+
+
+def solver_files(tr: Transcription, prefix: str) -> dict[str, str]:
+    """The solvers' objects and headers the Makefile and ``{prefix}functions.h`` name: IPOPT's
+    warm twin, generated apart, or fatrop's driver (:mod:`~ocgroupoid.export.fatrop`)."""
+    objects, headers = (("generated_warm.o",), ("generated_warm.h",)) if tr.fatrop is None \
+        else (exported_fatrop.OBJECTS, exported_fatrop.HEADERS)
+    return {"SOLVER_OBJECTS": " ".join(prefix + o for o in objects),
+            "SOLVER_HEADERS": " ".join(prefix + h for h in headers),
+            "SOLVER_HEADER": prefix + headers[0]}
 EXPORT_IPOPT = {"print_level": 0, "sb": "yes"}  # stdout carries the JSON, nothing else
 
 
@@ -119,21 +132,6 @@ class Export:
     mpc: Path | None = None  # DIR/mpc (built with the export's build) when the loop was written
 
 
-def _c_string(s: str) -> str:
-    """A C string literal of any text: printable ASCII as is (``?`` escaped: no trigraphs),
-    every other byte of its UTF-8 as a three-digit octal escape."""
-    out = []
-    for byte in s.encode("utf-8", "surrogatepass"):
-        c = chr(byte)
-        if c in '"\\?':
-            out.append("\\" + c)
-        elif 32 <= byte < 127:
-            out.append(c)
-        else:
-            out.append(f"\\{byte:03o}")
-    return '"' + "".join(out) + '"'
-
-
 def _one_line(text: str) -> str:
     """Text on one line (line breaks and other control characters as spaces)."""
     return " ".join("".join(c if c.isprintable() else " " for c in text).split())
@@ -154,29 +152,14 @@ def _make_value(path: Path) -> str:
     return text.replace("$", "$$").replace("#", "\\#")
 
 
-def _c_doubles(values: np.ndarray) -> str:
-    if not len(values):
-        return "{0.0}"
-    return "{" + ", ".join(f"{float(v):.17g}" for v in values) + "}"
-
-
-def _c_double(x: float) -> str:
-    """A double as a C literal that reads back exactly (Python's repr: ``1e-12``, ``600.0``)."""
-    return repr(float(x))
-
-
 def _c_range(r: Range) -> str:
     """One row of ``ocg_ranges``: the range of a key (:mod:`~ocgroupoid.model.ranges`)."""
-    return f"  {{{r.kind}, {_c_double(r.lo)}, {_c_double(r.hi)}, {_c_double(r.ratio)}}}"
+    return f"  {{{r.kind}, {c_double(r.lo)}, {c_double(r.hi)}, {c_double(r.ratio)}}}"
 
 
 def _fields(rows: list[tuple[str, int, int, int]]) -> str:
-    body = ",\n".join(f"  {{{_c_string(n)}, {o}, {r}, {c}}}" for n, o, r, c in rows)
+    body = ",\n".join(f"  {{{c_string(n)}, {o}, {r}, {c}}}" for n, o, r, c in rows)
     return "{\n" + (body or "  {0, 0, 0, 0}") + "\n}"
-
-
-def _names(names: Sequence[str]) -> str:
-    return "{" + (", ".join(_c_string(n) for n in names) or "0") + "}"
 
 
 def static_labels(pb: Problem) -> dict[str, Any]:
@@ -222,36 +205,36 @@ def model_values(tr: Transcription, default_p: np.ndarray, guess: str,
     flagged = [b.kind == "vector" and b.key in positive and b.key in pb.params
                for b in values.blocks]
     blocks = ",\n".join(
-        f"  {{{_c_string(b.key)}, {b.values.start}, {b.size}, {_c_string(b.meaning)}, "
+        f"  {{{c_string(b.key)}, {b.values.start}, {b.size}, {c_string(b.meaning)}, "
         f"{int(on)}}}" for b, on in zip(values.blocks, flagged))
     ranges = ",\n".join(_c_range(block_range(b.key, b.kind, on))
                          for b, on in zip(values.blocks, flagged))
     labels = static_labels(pb)
     return {
-        "COMMENT_NAME": plain_name(pb.name), "PROBLEM": _c_string(pb.name), "N": tr.N,
+        "COMMENT_NAME": plain_name(pb.name), "PROBLEM": c_string(pb.name), "N": tr.N,
         "ORDER": pb.order, "NX": tr.nx, "NP": tr.np, "NG": tr.ng, "NV": values.size,
         "P_T": tr.layout.p_slices["T"].start, "N_BLOCKS": len(values.blocks),
         "N_STATE_FIELDS": len(state_fields), "N_VELOCITY_FIELDS": len(velocity_fields),
         "N_PARAMETER_FIELDS": len(param_fields), "NU": len(controls),
         "N_MULTIPLIER_NAMES": len(multipliers), "N_POST": len(C_READOUT_OUTPUTS),
-        "SCHEME": _c_string(tr.disc.scheme), "BACKEND_FATROP": int(tr.fatrop is not None),
-        "BACKEND": _c_string(tr.backend),
+        "SCHEME": c_string(tr.disc.scheme), "BACKEND_FATROP": int(tr.fatrop is not None),
+        "BACKEND": c_string(tr.backend),
         "MAX_ITER": tr.fatrop.max_iter if tr.fatrop is not None else 0,
-        "RETRACTION": _c_string(tr.scheme.retraction), "RULE": _c_string(tr.disc.rule),
-        "GUESS_LABEL": _c_string(guess),
-        "MANIFOLDS_JSON": _c_string(json.dumps({f.state: f.manifold for f in G.factors})),
-        "LABELS_JSON": _c_string(json.dumps(labels)),
-        "BOUNDS_JSON": _c_string(json.dumps(labels["bounds"])),  # the C loop's mpc.json
+        "RETRACTION": c_string(tr.scheme.retraction), "RULE": c_string(tr.disc.rule),
+        "GUESS_LABEL": c_string(guess),
+        "MANIFOLDS_JSON": c_string(json.dumps({f.state: f.manifold for f in G.factors})),
+        "LABELS_JSON": c_string(json.dumps(labels)),
+        "BOUNDS_JSON": c_string(json.dumps(labels["bounds"])),  # the C loop's mpc.json
         "N_CHECKS": len(CHECKS), "N_FIGURES": len(FIGURES), "PARAMS_MAX_BYTES": FILE_BYTES,
         "RANGE_SIGNED": SIGNED, "RANGE_POSITIVE": POSITIVE, "RANGE_TIME": TIME,
-        "MAX_SECONDS": _c_double(tr.max_seconds),
+        "MAX_SECONDS": c_double(tr.max_seconds),
         "BLOCKS": f"{{\n{blocks}\n}}", "RANGES": f"{{\n{ranges}\n}}",
-        "DEFAULT_VALUES": _c_doubles(values.values_of(default_p)),
+        "DEFAULT_VALUES": c_doubles(values.values_of(default_p)),
         "STATE_FIELDS": _fields(state_fields), "VELOCITY_FIELDS": _fields(velocity_fields),
-        "PARAMETER_FIELDS": _fields(param_fields), "CONTROL_NAMES": _names(controls),
-        "MULTIPLIER_NAMES": _names(multipliers), "CHECK_NAMES": _names(CHECKS),
-        "FIGURE_NAMES": _names(FIGURES),
-        "CHECK_FAILURES": _names([CHECK_FAILURES[c] for c in CHECKS]),
+        "PARAMETER_FIELDS": _fields(param_fields), "CONTROL_NAMES": c_names(controls),
+        "MULTIPLIER_NAMES": c_names(multipliers), "CHECK_NAMES": c_names(CHECKS),
+        "FIGURE_NAMES": c_names(FIGURES),
+        "CHECK_FAILURES": c_names([CHECK_FAILURES[c] for c in CHECKS]),
     }
 
 
@@ -372,7 +355,12 @@ def export_c(problem: Problem | CompiledProblem, folder: str | Path, N: int | No
     guess = tr.guess_labels[0]  # what the C solver starts from
     model = {**names, **model_values(tr, p, guess, positive),
              **(closed_loop.values(tr, real_time) if loop else {})}
-    for name in PREFIXED + (closed_loop.PREFIXED if loop else ()):
+    model.update(solver_files(tr, prefix))
+    if tr.fatrop is not None:
+        model.update(exported_fatrop.values(tr))
+        files.update(exported_fatrop.driver(prefix))
+    for name in PREFIXED + (closed_loop.PREFIXED if loop else ()) + \
+            (exported_fatrop.TEMPLATES if tr.fatrop is not None else ()):
         files[prefix + name] = _render(f"{name}.in", model)
     files["main.c"] = _render("main.c.in", names)
     if loop:
@@ -384,7 +372,9 @@ def export_c(problem: Problem | CompiledProblem, folder: str | Path, N: int | No
             "CASADI": ca.__version__,  # type: ignore[attr-defined]  # not in its stubs
             "IPOPT_LIB": lib, "IPOPT_INCLUDE": include,
             "GUESS": _one_line(guess), "BACKEND": tr.backend,
-            "BACKEND_LIBS": BACKEND_LIBS[tr.backend], "KEYS": _blocks_table(tr.values)}
+            "BACKEND_LIBS": BACKEND_LIBS[tr.backend], "KEYS": _blocks_table(tr.values),
+            **solver_files(tr, prefix), "SOLVER_README": _render(
+                f"solver_{'fatrop' if tr.fatrop is not None else 'ipopt'}.md.in", names).strip()}
     files["Makefile"] = _render("Makefile.in", {
         **info, "IPOPT_LIB": _make_value(lib), "IPOPT_INCLUDE": _make_value(include),
         **closed_loop.make_values(prefix, loop, real_time is not None)})

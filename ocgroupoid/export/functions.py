@@ -4,13 +4,14 @@ Each is a Function the Python path evaluates too (nothing here computes anything
 named after the export's prefix (``ocg_`` by default), so that two exports link into one
 program:
 
-``{prefix}gen_nlpsol(x0, p) -> (x, f, g, lam_g, lam_x)``  the Transcription's solver (IPOPT,
-or fatrop on the stage form: ``solver.backend``) with the bounds computed from p, and
-``{prefix}gen_nlpsol_warm`` the same from a primal-dual point (IPOPT's warm start; fatrop's
-primal); ``{prefix}gen_guess(p) -> x0`` the first geodesic guess; ``{prefix}gen_pack(values)
--> (p, bad)`` the packing of a parameter file's numbers; ``{prefix}gen_post(x, p, lam_g)`` the
-read-out a Solution is made of; ``{prefix}gen_verify(x, p, lam_g) -> (ratios, figures)`` the
-verdict's checks (:mod:`~ocgroupoid.verify.graph`).
+``{prefix}gen_nlpsol(x0, p) -> (x, f, g, lam_g, lam_x)``  the Transcription's IPOPT solver
+with the bounds computed from p, and ``{prefix}gen_nlpsol_warm`` the same from a primal-dual
+point (with ``solver.backend: fatrop`` both are fatrop's driver instead, and the stage form's
+Functions are generated: :mod:`~ocgroupoid.export.fatrop`); ``{prefix}gen_guess(p) -> x0``
+the first geodesic guess; ``{prefix}gen_pack(values) -> (p, bad)`` the packing of a
+parameter file's numbers; ``{prefix}gen_post(x, p, lam_g)`` the read-out a Solution is made
+of; ``{prefix}gen_verify(x, p, lam_g) -> (ratios, figures)`` the verdict's checks
+(:mod:`~ocgroupoid.verify.graph`).
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ from ..nlp.transcription import Transcription
 from ..verify.diagnostics import replay_of
 from ..verify.graph import verify_function
 from ..verify.verdict import REPLAY_TOLERANCE, check_tolerance
+from . import fatrop as exported_fatrop
 
 #: outputs of the generated solvers ({prefix}gen_nlpsol, {prefix}gen_nlpsol_warm)
 SOLVE_OUTPUTS = ("x", "f", "g", "lam_g", "lam_x")
@@ -85,11 +87,11 @@ def pack_function(tr: Transcription, prefix: str) -> ca.Function:
 
 
 def solver_function(tr: Transcription, prefix: str, warm: bool = False) -> ca.Function:
-    """``{prefix}gen_nlpsol(x0, p) -> (x, f, g, lam_g, lam_x)``: the Transcription's solver
+    """``{prefix}gen_nlpsol(x0, p) -> (x, f, g, lam_g, lam_x)``: the Transcription's IPOPT solver
     (:meth:`Transcription.solve_graph`) with the bounds of
     :attr:`Transcription.bounds_function`, computed from p (a bound given by a parameter is a
     runtime input of the exported solver); with ``warm``, ``{prefix}gen_nlpsol_warm(x0, p, lam_g0,
-    lam_x0)``, its primal-dual warm start (fatrop: the primal point)."""
+    lam_x0)``, its primal-dual warm start."""
     ins = [ca.MX.sym("x0", tr.nx), ca.MX.sym("p", tr.np)]
     if warm:
         ins += [ca.MX.sym("lam_g0", tr.ng), ca.MX.sym("lam_x0", tr.nx)]
@@ -101,16 +103,21 @@ def solver_function(tr: Transcription, prefix: str, warm: bool = False) -> ca.Fu
 
 def generate(tr: Transcription, ipopt: dict[str, Any] | None, prefix: str,
              prelude: str, loop: Sequence[ca.Function] = ()) -> dict[str, str]:
-    """The CasADi-generated ``{prefix}generated.c/.h`` and ``{prefix}generated_warm.c/.h``
+    """The CasADi-generated ``{prefix}generated.c/.h``; with IPOPT ``{prefix}generated_warm.c/.h``
     (the warm-start solver: a second IPOPT instance, whose generated callbacks would clash
-    with the first's in one file), and with ``loop`` (:mod:`~ocgroupoid.export.mpc`)
-    ``{prefix}generated_mpc.c/.h`` of its Functions; each C file after ``prelude``; generated
-    in a temporary folder. The file name is CasADi's prefix of its internal symbols."""
-    groups: list[tuple[str, Sequence[ca.Function]]] = [
-        (f"{prefix}generated", (solver_function(tr, prefix), guess_function(tr, prefix),
-                                pack_function(tr, prefix), post_function(tr, prefix),
-                                verify_export(tr, ipopt, prefix))),
-        (f"{prefix}generated_warm", (solver_function(tr, prefix, warm=True),))]
+    with the first's in one file), with fatrop the Functions its driver runs instead of the
+    solvers (:mod:`~ocgroupoid.export.fatrop`, which writes the solvers); with ``loop``
+    (:mod:`~ocgroupoid.export.mpc`) ``{prefix}generated_mpc.c/.h`` of its Functions; each C
+    file after ``prelude``; generated in a temporary folder. The file name is CasADi's prefix
+    of its internal symbols."""
+    rest = (guess_function(tr, prefix), pack_function(tr, prefix), post_function(tr, prefix),
+            verify_export(tr, ipopt, prefix))
+    groups: list[tuple[str, Sequence[ca.Function]]]
+    if tr.fatrop is None:
+        groups = [(f"{prefix}generated", (solver_function(tr, prefix), *rest)),
+                  (f"{prefix}generated_warm", (solver_function(tr, prefix, warm=True),))]
+    else:
+        groups = [(f"{prefix}generated", (*exported_fatrop.functions(tr, prefix), *rest))]
     if loop:
         groups.append((f"{prefix}generated_mpc", loop))
     out = {}

@@ -53,6 +53,7 @@ from ..nlp.program import C_READOUT_OUTPUTS
 from ..nlp.rti import FLOOR, RtiFunctions
 from ..nlp.stageform import stage_form
 from ..nlp.transcription import Transcription
+from .literals import c_names
 
 #: the loop's files rendered from c_templates (prefixed as the library's) and the driver's
 PREFIXED = ("mpc.h", "mpc.c")
@@ -115,10 +116,6 @@ def _coefficients(tr: Transcription) -> int:
     return int(out.size1())
 
 
-def _names(names: list[str]) -> str:
-    return "{" + (", ".join(f'"{n}"' for n in names) or "0") + "}"
-
-
 def values(tr: Transcription, real_time: RtiFunctions | None) -> dict[str, Any]:
     """What mpc.h.in and mpc.c.in are filled with."""
     G, P = tr.problem.groupoid, tr.layout.p_slices["P"]
@@ -137,7 +134,7 @@ def values(tr: Transcription, real_time: RtiFunctions | None) -> dict[str, Any]:
     return {"MPC_NZ": G.state_size + G.algebra_dim, "MPC_NS": G.state_size,
             "MPC_NP_PLANT": P.stop - P.start, "MPC_P_OFFSET": P.start,
             "MPC_N_DISTANCES": len(distances), "MPC_N_TERMINAL": len(terminals),
-            "MPC_DISTANCE_NAMES": _names(distances), "MPC_TERMINAL_NAMES": _names(terminals),
+            "MPC_DISTANCE_NAMES": c_names(distances), "MPC_TERMINAL_NAMES": c_names(terminals),
             "MPC_PIECE_COEFFICIENTS": max(_coefficients(tr), 1),
             "MPC_STAGES": stage_form(tr.blocks, tr.nx).K + 1, "MPC_MIN_HORIZON": MIN_HORIZON,
             **sizes}

@@ -121,10 +121,12 @@ class Transcription(NonlinearProgram):
     def solve_graph(self, x0: ca.MX, p: ca.MX, lam_g0: ca.MX | None = None,
                     lam_x0: ca.MX | None = None) -> dict[str, ca.MX]:
         """A solve from x0 as a graph (``x, f, g, lam_g, lam_x``) with the bounds of
-        :attr:`bounds_function`: the first backend's nlpsol inside, for the exported C
-        solver. With multipliers, IPOPT's primal-dual warm start; fatrop has none and starts
-        from x0."""
-        return self.backends[0].graph(x0, p, lam_g0, lam_x0)
+        :attr:`bounds_function`: IPOPT's nlpsol inside, for the exported C solver (with
+        ``solver.backend: fatrop`` the export runs fatrop's driver instead:
+        :mod:`ocgroupoid.export.fatrop`). With multipliers, IPOPT's primal-dual warm start."""
+        ipopt = self.backends[-1]
+        assert isinstance(ipopt, IpoptBackend)  # the last in every turn (backends.build)
+        return ipopt.graph(x0, p, lam_g0, lam_x0)
 
     def _warm(self, guess: Guess) -> bool:
         """Whether ``guess`` is a primal-dual point of this NLP (sizes match)."""

@@ -5,8 +5,11 @@ solver options (:class:`~ocgroupoid.nlp.options.SolverOptions`), and then:
 
 * :meth:`Backend.run` solves from a :class:`Start` (a primal point, parameters, optionally
   multipliers for a primal-dual warm start, a listener of iterations, a deadline and a stop
-  request) and returns a :class:`Run`: the point, its multipliers, status and iterations;
-* :meth:`Backend.graph` is the same solve as a CasADi graph, for the exported C solver.
+  request) and returns a :class:`Run`: the point, its multipliers, status and iterations.
+
+The exported C solver is each backend's own: IPOPT's the same solve as a CasADi graph
+(``IpoptBackend.graph``), which CasADi's code generator writes; fatrop's its driver on the
+stage form's Functions (``FatropBackend.exported``, :mod:`ocgroupoid.export.fatrop`).
 
 What a backend cannot do it ignores (fatrop has no dual warm start and no iteration
 callback). Which backends run, and in what order, is the solve's policy
@@ -18,7 +21,7 @@ from __future__ import annotations
 import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
-from typing import Any, Callable, ClassVar, Protocol
+from typing import Callable, ClassVar, Protocol
 
 import casadi as ca
 import numpy as np
@@ -106,8 +109,3 @@ class Backend(ABC):
     @abstractmethod
     def run(self, start: Start) -> Run:
         """Solve from ``start``."""
-
-    @abstractmethod
-    def graph(self, x0: ca.MX, p: ca.MX, lam_g0: ca.MX | None = None,
-              lam_x0: ca.MX | None = None) -> dict[str, Any]:
-        """The solve from x0 as a graph: ``x, f, g, lam_g, lam_x``."""

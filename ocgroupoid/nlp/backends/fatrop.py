@@ -11,7 +11,8 @@ its upper triangle, with the gradient of the Lagrangian, both summed from the st
 The Functions (compiled with ``jit``, else evaluated by CasADi) drive fatrop through its own
 C interface (:mod:`~ocgroupoid.nlp.backends.fatrop_ocp`), the same solve to the last bit as
 CasADi's fatrop ``nlpsol``, whose build grows as N² (so3 at N = 1024: 2.4-3.3 s, against 0.34 s);
-CasADi's ``nlpsol`` runs it for the exported C solver, and where the driver does not compile.
+the exported C solver runs the same driver (:attr:`FatropBackend.exported`), and CasADi's
+``nlpsol`` runs where the driver does not compile.
 
 fatrop reads the IPOPT options it shares (:data:`SHARED_OPTIONS`, :data:`RENAMED_OPTIONS`)
 over its own (:data:`DEFAULT_FATROP`: no watchdog, more second-order corrections). It has no
@@ -32,7 +33,7 @@ process).
 from __future__ import annotations
 
 import time
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from functools import cached_property
 from typing import Any
 
@@ -48,7 +49,7 @@ from ..jit import compiled
 from ..options import SolverOptions
 from ..stageform import NotStaged, StageForm, stage_form
 from .base import ACCEPTABLE, INTERRUPTED, TIMED_OUT, Backend, Graph, Run, Start
-from .fatrop_ocp import FatropOcp, Guard, Unavailable, option_kinds
+from .fatrop_ocp import BlockMaps, FatropOcp, Guard, Unavailable, block_maps, option_kinds
 from .ipopt import ipopt_options
 
 #: IPOPT options fatrop also has; the others do not apply to it
@@ -239,6 +240,26 @@ def _functions(sf: StageForm, np_: int, derivatives: Derivatives
     return {"x": z, "p": q, "f": s_f * fns["f"], "g": s * g}, functions
 
 
+@dataclass(frozen=True)
+class Exported:
+    """fatrop as the exported C solver runs it (:mod:`ocgroupoid.export.fatrop`): its driver
+    (``fatrop_ocp.c``) on the stage form ``form`` with the five ``functions`` (graphs: the C
+    code generator writes them) and fatrop's ``options`` (their ``kinds``, as
+    :func:`~.fatrop_ocp.option_kinds` gives them); ``arguments(x0, p) -> (z0, q, lbg, ubg,
+    lbz, ubz)`` its inputs from an original point (:meth:`FatropBackend.arguments`) and
+    ``unscaled(z, f, g, lam_g, lam_x, q) -> (x, f, g, lam_g, lam_x)`` its solution in the
+    original variables and rows (:meth:`FatropBackend.unscaled`); ``maps`` where the
+    Jacobian's and the Hessian's nonzeros go in the stage blocks."""
+
+    form: StageForm
+    functions: dict[str, ca.Function]
+    arguments: ca.Function
+    unscaled: ca.Function
+    maps: BlockMaps
+    options: dict[str, Any]
+    kinds: dict[str, int]
+
+
 #: the solver's inputs (:meth:`FatropBackend.arguments`), as nlpsol names them
 ARGUMENTS = ("x0", "p", "lbg", "ubg", "lbx", "ubx")
 
@@ -261,6 +282,9 @@ class FatropBackend(Backend):
             raise ConfigError(f"solver.backend fatrop needs the NLP as a chain of stages, and "
                               f"this one is not ({err}); use solver.backend: ipopt") from None
         graph, functions = _functions(self.form, nlp.np, nlp.derivatives)
+        #: the five Functions as graphs (before jit compiles them), for the exported solver
+        self.functions = functions
+        self._scaling = row_scales(ipopt)
         #: the bounds fatrop is given, in stage form (:func:`tightened`)
         self.bounds = tightened(nlp.bounds_function, self.form)
         # fatrop's options: ours, the IPOPT options it shares, then the solve's own
@@ -285,7 +309,7 @@ class FatropBackend(Backend):
                 functions, *([beside] if beside is not None else []))
             self.compiled_beside = others[0] if others else None
         #: the rows' and the objective's scales at a start (:func:`_scales`)
-        self.scales = _scales(functions, self.form, nlp.np, row_scales(ipopt))
+        self.scales = _scales(functions, self.form, nlp.np, self._scaling)
         sf = self.form
         self.options: dict[str, Any]
         self.options = {"structure_detection": "manual", "N": sf.K, "nx": sf.nx, "nu": sf.nu,
@@ -313,9 +337,8 @@ class FatropBackend(Backend):
 
     @cached_property
     def solver(self) -> ca.Function:
-        """CasADi's fatrop nlpsol on the stage form (its build grows as N²: built with the
-        backend only where fatrop's own interface is unavailable, else if the exported solver
-        needs it)."""
+        """CasADi's fatrop nlpsol on the stage form (its build grows as N²: built only where
+        fatrop's own interface is unavailable)."""
         try:
             return ca.nlpsol(self._name, "fatrop", self.nlp, self.options)
         except RuntimeError as err:
@@ -341,16 +364,16 @@ class FatropBackend(Backend):
         return Buffered(ca.Function(f"{self._name}_arguments", [x0, p], list(
             self.arguments(x0, p).values()), ["x0", "p"], [f"{a}_out" for a in ARGUMENTS]))
 
-    def arguments(self, x0: Any, p: Any) -> dict[str, Any]:
+    def arguments(self, x0: Any, p: Any, scales: ca.Function | None = None) -> dict[str, Any]:
         """The solver's inputs in stage form, for an original point x0 and parameters p (numbers,
-        or graphs for the exported solver; every copy starts at its variable): its parameters
-        are ``[p; s; s_f]``, with the scales at x0 (:func:`_scales`)."""
+        or graphs; every copy starts at its variable): its parameters are ``[p; s; s_f]``, with
+        the scales at x0 (:func:`_scales`: :attr:`scales`, or ``scales`` of graphs)."""
         if not isinstance(p, ca.MX):
             return dict(zip(ARGUMENTS, self._arguments(x0=x0, p=p).values()))
         z0 = self.form.z_of(x0)
-        scales = self.scales(z0, p)
-        lbg, ubg, lbz, ubz = self.bounds(p, scales[0])
-        return dict(zip(ARGUMENTS, (z0, ca.vertcat(p, *scales), lbg, ubg, lbz, ubz)))
+        s, s_f = (scales or self.scales)(z0, p)
+        lbg, ubg, lbz, ubz = self.bounds(p, s)
+        return dict(zip(ARGUMENTS, (z0, ca.vertcat(p, s, s_f), lbg, ubg, lbz, ubz)))
 
     def _solve_graph(self, solver: ca.Function, x0: ca.MX, p: ca.MX) -> dict[str, ca.MX]:
         """``solver`` (fatrop on the stage form) from the original point x0 with parameters p,
@@ -429,16 +452,24 @@ class FatropBackend(Backend):
                    iterations, 0.0)
 
     @cached_property
-    def exported_solver(self) -> ca.Function:
-        """:attr:`solver` without the stop at an acceptable point (:data:`ACCEPTABLE_STOP`): the
-        exported C solver has no IPOPT to finish from it. Built on first use."""
-        options = {**self.options, "fatrop": {**self.options["fatrop"],
-                                              "acceptable_iter": self.max_iter + 1}}
-        return ca.nlpsol(f"{self._name}_exported", "fatrop", self.nlp, options)
-
-    def graph(self, x0: ca.MX, p: ca.MX, lam_g0: ca.MX | None = None,
-              lam_x0: ca.MX | None = None) -> dict[str, Any]:
-        """The same solve as a graph in the original variables (the exported solver, which
-        runs to the tolerance: :attr:`exported_solver`): ``x, f, g, lam_g, lam_x``; fatrop
-        has no dual warm start and starts from x0."""
-        return self._solve_graph(self.exported_solver, x0, p)
+    def exported(self) -> Exported:
+        """What the exported C solver runs (:class:`Exported`): fatrop's own interface, as
+        here, without the stop at an acceptable point (:data:`ACCEPTABLE_STOP`: it has no
+        IPOPT to finish from it), on the Functions as graphs. Built on first use."""
+        sf, functions = self.form, self.functions
+        options = {**self.options["fatrop"], "acceptable_iter": self.max_iter + 1}
+        np_ = self.bounds.size1_in(0)
+        x0, p = ca.MX.sym("x0", sf.z_slot.size), ca.MX.sym("p", np_)
+        a = self.arguments(x0, p, _scales(functions, sf, np_, self._scaling))
+        arguments = ca.Function("fatrop_in", [x0, p], list(a.values()), ["x0", "p"],
+                                ["z0", "q", "lbg", "ubg", "lbz", "ubz"])
+        n, nq = sf.order.size, arguments.nnz_out(1)
+        r = {"x": ca.MX.sym("z", sf.nz), "f": ca.MX.sym("f"), "g": ca.MX.sym("g", n),
+             "lam_g": ca.MX.sym("lam_g", n), "lam_x": ca.MX.sym("lam_x", sf.nz)}
+        q = ca.MX.sym("q", nq)
+        back = self.unscaled(r, q)
+        unscaled = ca.Function("fatrop_out", [*r.values(), q], [back[k] for k in UNSCALED],
+                               ["z", "f_z", "g_z", "lam_g_z", "lam_x_z", "q"], list(UNSCALED))
+        maps = block_maps(sf, functions["nlp_jac_g"].sparsity_out(1),
+                          functions["nlp_hess_l"].sparsity_out(1))
+        return Exported(sf, functions, arguments, unscaled, maps, options, option_kinds(options))

@@ -29,54 +29,14 @@
 #include <blasfeo.h>
 #include "fatrop/ocp/OCPCInterface.h"
 #include "fatrop_guard.h"
+#include "fatrop_ocp.h"
 
-typedef long long cint; /* CasADi's casadi_int in generated code */
-typedef int (*ocg_eval)(const double **arg, double **res, cint *iw, double *w, int mem);
-typedef int (*ocg_work)(cint *sz_arg, cint *sz_res, cint *sz_iw, cint *sz_w);
-typedef void (*ocg_buffer_eval)(void *buffer);
+/* fatrop's callbacks take arguments the driver has no use for (parameters it keeps itself) */
+#if defined(__GNUC__)
+#pragma GCC diagnostic ignored "-Wunused-parameter"
+#endif
 
-enum { OCG_F, OCG_G, OCG_GRAD_F, OCG_JAC_G, OCG_HESS_L, OCG_NFUN };
-enum { OCG_MAX_IN = 4, OCG_MAX_OUT = 2 }; /* nlp_hess_l's inputs, nlp_jac_g's outputs */
 enum { OCG_AB = 0, OCG_CD = 1, OCG_EYE = 2 };
-
-/* The problem, constant over solves (filled by Python through ctypes). */
-struct ocg_problem {
-  int K;                         /* stages 0..K */
-  const int *nx, *nu, *ng;       /* K + 1 each */
-  const int *col;                /* first column of stage k (x_k, then u_k) */
-  const int *row_ab, *row_cd;    /* first gap row into x_{k+1}; first row of stage k */
-  const int *ab_off, *cd_off, *rsq_off; /* offsets of the dense stage blocks */
-  int nz, n_rows, nnz_a, nnz_h, n_ab, n_cd, n_rsq;
-  const int *a_kind, *a_index;   /* per Jacobian nonzero: block kind and index in it */
-  const int *h_index;            /* per Hessian nonzero: index in RSQ, or -1 */
-  ocg_eval eval[OCG_NFUN];       /* compiled code, or NULL: */
-  ocg_work work[OCG_NFUN];
-  ocg_buffer_eval buffer_eval;   /* casadi::_function_buffer_eval */
-  void *buffer[OCG_NFUN];        /* each Function's FunctionBuffer, bound to: */
-  double *buffer_in[OCG_NFUN][OCG_MAX_IN], *buffer_out[OCG_NFUN][OCG_MAX_OUT];
-  int buffer_n_in[OCG_NFUN][OCG_MAX_IN]; /* the inputs' nonzeros */
-  int n_options;
-  const char **option_names;
-  const int *option_kinds;       /* 0 double, 1 int, 2 bool, 3 string */
-  const double *option_values;
-  const char **option_strings;
-};
-
-/* One solve's inputs and outputs. */
-struct ocg_solve {
-  const double *z0, *q, *lbz, *ubz, *lbg, *ubg;
-  double *z, *g, *lam_g, *lam_x, *f;
-  int iterations, return_flag, status, bad_structure;
-  double seconds[OCG_NFUN];      /* each Function's evaluations during fatrop's call */
-  int calls[OCG_NFUN];
-  double solve_seconds;          /* fatrop's call, evaluations included */
-  /* a guarded solve (fatrop_guard.c): left after `limit` seconds, at the `nan_limit`-th
-   * non-finite evaluation, on Ctrl-C (watch_sigint) or when check() says stop (asked every
-   * `every` seconds); `left` says why (OCG_LEFT_*), `nans` counts the evaluations */
-  int guarded, nan_limit, watch_sigint, left, nans;
-  double limit, every;
-  int (*check)(void);
-};
 
 struct ocg_data {
   const struct ocg_problem *p;
@@ -87,7 +47,7 @@ struct ocg_data {
   double **res;
   double seconds[OCG_NFUN];      /* this solve's evaluations so far */
   int calls[OCG_NFUN];
-  cint *iw;
+  ocg_cint *iw;
   double *w;
   struct ocg_guard *guard;       /* this solve's guard, or NULL: unguarded */
   struct FatropOcpCInterface ocp;
@@ -461,7 +421,7 @@ void ocg_context_free(struct ocg_context *c) {
 struct ocg_context *ocg_context_new(const struct ocg_problem *p) {
   struct ocg_context *c = calloc(1, sizeof *c);
   struct ocg_data *d;
-  cint sz_arg = 0, sz_res = 0, sz_iw = 0, sz_w = 0, a, r, iw, w;
+  ocg_cint sz_arg = 0, sz_res = 0, sz_iw = 0, sz_w = 0, a, r, iw, w;
   int i, n_max = p->nz > p->n_rows ? p->nz : p->n_rows;
   if (!c) return NULL;
   d = &c->d;
@@ -479,7 +439,7 @@ struct ocg_context *ocg_context_new(const struct ocg_problem *p) {
                               p->n_cd + p->n_rsq + sz_w + 1), sizeof(double));
   d->arg = calloc((size_t)sz_arg + 4, sizeof(double *));
   d->res = calloc((size_t)sz_res + 2, sizeof(double *));
-  d->iw = calloc((size_t)sz_iw + 1, sizeof(cint));
+  d->iw = calloc((size_t)sz_iw + 1, sizeof(ocg_cint));
   c->split = calloc((size_t)c->n_split, sizeof(int));
   c->previous = calloc((size_t)c->n_split, sizeof(int));
   if (!c->blocks || !d->arg || !d->res || !d->iw || !c->split || !c->previous) {

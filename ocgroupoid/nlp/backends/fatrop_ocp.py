@@ -39,6 +39,8 @@ from ..stageform import NotStaged, StageForm
 from .base import never
 
 SOURCE = Path(__file__).with_name("fatrop_ocp.c")
+#: its structs and entry points, which the exported C solver includes too
+HEADER = Path(__file__).with_name("fatrop_ocp.h")
 #: the guard of a solve in the caller's process, compiled with the driver
 GUARD = (Path(__file__).with_name("fatrop_guard.c"), Path(__file__).with_name("fatrop_guard.h"))
 #: fatrop's kinds of option (``fatrop_ocp_c_option_type``; -1 for a name it does not have)
@@ -57,7 +59,7 @@ SOLVE_ARRAYS = ("z0", "q", "lbz", "ubz", "lbg", "ubg", "z", "g", "lam_g", "lam_x
 
 
 class _Problem(ctypes.Structure):
-    """``struct ocg_problem`` of ``fatrop_ocp.c``."""
+    """``struct ocg_problem`` of ``fatrop_ocp.h``."""
 
     _fields_ = [("K", ctypes.c_int), ("nx", _INT_P), ("nu", _INT_P), ("ng", _INT_P),
                 ("col", _INT_P), ("row_ab", _INT_P), ("row_cd", _INT_P),
@@ -77,7 +79,7 @@ class _Problem(ctypes.Structure):
 
 
 class _Solve(ctypes.Structure):
-    """``struct ocg_solve`` of ``fatrop_ocp.c`` (its arrays by address)."""
+    """``struct ocg_solve`` of ``fatrop_ocp.h`` (its arrays by address)."""
 
     _fields_ = [*((name, ctypes.c_void_p) for name in SOLVE_ARRAYS),
                 ("iterations", ctypes.c_int), ("return_flag", ctypes.c_int),
@@ -183,7 +185,7 @@ def _driver() -> ctypes.CDLL | Unavailable:
     flags = [str(GUARD[0]), "-O2", "-shared", "-fPIC", f"-I{casadi_dir / 'include'}",
              f"-I{SOURCE.parent}", f"-L{casadi_dir}", f"-Wl,-rpath,{casadi_dir}", "-lfatrop",
              "-lblasfeo", "-lrt", "-lm"]
-    source = b"".join(path.read_bytes() for path in (SOURCE, *GUARD))
+    source = b"".join(path.read_bytes() for path in (SOURCE, HEADER, *GUARD))
     digest = hashlib.sha256(source + " ".join(flags).encode() + ca.CasadiMeta.version().encode())
     path = cache_dir() / f"ocg_fatrop_{digest.hexdigest()[:24]}.so"
     if not path.exists():
