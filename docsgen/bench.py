@@ -33,8 +33,8 @@ def table(header: list[str], rows: list[list[Any]]) -> str:
 
 
 def _ratio(h: dict[str, Any] | None, name: bool = True, level: bool = True) -> str:
-    """``1e-4: 14.0x (order4)``; ``≥`` when ours was more accurate on every grid; without
-    the level where the column names it."""
+    """``1e-4: 14.0x (order4)``; ``≥`` for a lower bound (ours more accurate on every grid,
+    or the baseline on none); without the level where the column names it."""
     if not h:
         return "-"
     bound = "≥ " if h["lower_bound"] else ""

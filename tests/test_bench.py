@@ -168,10 +168,14 @@ def test_time_at_equal_accuracy_is_read_on_the_log_log_line() -> None:
     base = [{"N": 8, "e": 1e-1, "seconds": 1.0}, {"N": 16, "e": 1e-3, "seconds": 4.0}]
     ours = [{"N": 8, "e": 5e-3, "seconds": 0.1}, {"N": 16, "e": 5e-5, "seconds": 0.4}]
     found = {c["level"]: c for c in compare({"rk4_quat": base, "order4": ours}, "e")}
-    assert set(found) == {1e-2, 1e-3}  # at 1e-1 the baseline's own time is only a bound
+    assert set(found) == {1e-2, 1e-3, 1e-4}  # at 1e-1 the baseline's own time is only a bound
     assert found[1e-2]["lower_bound"] and math.isclose(found[1e-2]["ratio"], 2.0 / 0.1)
     t_ours = 0.1 * 4 ** (math.log(5) / math.log(100))
     assert math.isclose(found[1e-3]["ratio"], 4.0 / t_ours) and not found[1e-3]["lower_bound"]
+    # 1e-4: the baseline's finest grid (1e-3, 4 s) falls short; a finer one takes longer
+    t_ours = 0.1 * 4 ** (math.log(50) / math.log(100))
+    assert found[1e-4]["lower_bound"] and math.isclose(found[1e-4]["ratio"], 4.0 / t_ours)
+    assert found[1e-4]["baseline_seconds"] == 4.0
     assert headline(list(found.values()), 1e-2)["level"] == 1e-3  # interpolated first
 
 

@@ -4,8 +4,10 @@ A method's line is its rows ordered by N, (time, error) on log-log axes. The tim
 for an error e is read where the line first falls to e, linearly in (log e, log t) between
 the two grids around it; when even its coarsest grid is more accurate than e, that grid's
 time is an upper bound; when no grid reaches e, it is undefined. The ratio of the baseline's
-time to our fastest scheme's is read at the decades 10^-k that the baseline's line crosses
-and one of ours reaches (a lower bound where ours is bounded).
+time to our fastest scheme's is read at the decades 10^-k that one of ours reaches and the
+baseline's line crosses or never reaches. It is a lower bound where ours is bounded, and
+where the baseline never reaches the level: it would need a grid finer than its finest,
+which takes at least that grid's time (the time of a solve grows with N).
 """
 
 from __future__ import annotations
@@ -49,6 +51,13 @@ def time_at(rows: list[dict[str, Any]], key: str, level: float
     return None
 
 
+def finest_time(rows: list[dict[str, Any]], key: str) -> float | None:
+    """Seconds of the finest grid among the rows with an error ``key`` (None without any):
+    a lower bound on the time of any finer grid."""
+    pts = [(r["N"], r["seconds"]) for r in rows if r.get(key)]
+    return max(pts)[1] if pts else None
+
+
 def error_range(rows: list[dict[str, Any]], key: str) -> tuple[float, float] | None:
     """The smallest and largest error of the rows (None without any)."""
     errors = [r[key] for r in rows if r.get(key)]
@@ -64,10 +73,11 @@ def decades(low: float, high: float) -> list[float]:
 
 def compare(lines: dict[str, list[dict[str, Any]]], key: str, baseline: str = "rk4_quat"
             ) -> list[dict[str, Any]]:
-    """At every decade of error that ``baseline``'s line crosses and one of ours reaches:
-    the baseline's time over our fastest (> 1: ours is faster; ``lower_bound`` when ours is
-    already more accurate on its coarsest grid, so the true ratio is larger), and which of
-    ours that was."""
+    """At every decade of error that one of ours reaches and ``baseline``'s line crosses or
+    never reaches: the baseline's time over our fastest (> 1: ours is faster), and which of
+    ours that was. ``lower_bound`` when the true ratio is larger: ours is already more
+    accurate on its coarsest grid, or the baseline is not accurate enough on its finest
+    (its time there stands for that of the finer grid it would need; module docstring)."""
     if baseline not in lines:
         return []
     out = []
@@ -79,14 +89,20 @@ def compare(lines: dict[str, list[dict[str, Any]]], key: str, baseline: str = "r
         return []
     low, high = min(r[0] for r in ranges), max(r[1] for r in ranges)
     for level in decades(low, high):
-        at_base = time_at(base, key, level)
         times = {m: t for m, rows in ours.items() if (t := time_at(rows, key, level))}
-        if at_base is None or at_base[1] or not times:
+        at_base = time_at(base, key, level)
+        if at_base is None:  # the baseline's finest grid is less accurate than level
+            base_seconds, short = finest_time(base, key), True
+        elif at_base[1]:  # the baseline's own time is only an upper bound
+            continue
+        else:
+            base_seconds, short = at_base[0], False
+        if not times or base_seconds is None:
             continue
         best = min(times, key=lambda m: times[m][0])
         out.append({"level": level, "ours": best, "ours_seconds": times[best][0],
-                    "baseline_seconds": at_base[0], "ratio": at_base[0] / times[best][0],
-                    "lower_bound": times[best][1],
+                    "baseline_seconds": base_seconds, "ratio": base_seconds / times[best][0],
+                    "lower_bound": times[best][1] or short,
                     "all_ours_seconds": {m: t for m, (t, _) in times.items()}})
     return out
 
