@@ -239,7 +239,10 @@ def test_unavailable_linear_solver_names_the_available_ones(tmp_path) -> None:
     ("mu_strategy: bogus", "choose one of monotone, adaptive"),
     ("foo: 1", "IPOPT has no option 'foo'"),
     ("max_iter: many", "'many' has the wrong type"),
-    ("tol: .nan", "nan is not finite")])
+    ("tol: .nan", "nan is not finite"),
+    ("mu_allow_fast_monotone_decrease: no", 'false is a YAML boolean (YAML reads an unquoted '
+     'yes, no, true or false as one); IPOPT\'s switches take text: write "no" in quotes'),
+    ("warm_start_init_point: true", 'write "yes" in quotes')])
 def test_ipopt_options_are_checked_before_the_build(tmp_path, option: str, expected: str
                                                      ) -> None:
     text = SO3.replace("ipopt: {tol: 1.0e-10}", f"ipopt: {{{option}}}")

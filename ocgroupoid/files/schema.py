@@ -73,6 +73,17 @@ def _level(v: Any) -> int | str:
     return v
 
 
+def _ipopt_value(v: Any) -> Any:
+    """An IPOPT option's value: a number or a text, never a YAML boolean (which would reach
+    IPOPT as 0 or 1, and IPOPT's switches take the text yes or no)."""
+    if isinstance(v, bool):
+        word = "yes" if v else "no"
+        raise ValueError(f"{str(v).lower()} is a YAML boolean (YAML reads an unquoted yes, "
+                         f"no, true or false as one); IPOPT's switches take text: write "
+                         f"\"{word}\" in quotes")
+    return v
+
+
 def _intervals(v: Any) -> Any:
     """A number of intervals >= 2 (no float, no boolean), or ``auto``."""
     if v == "auto":
@@ -200,7 +211,7 @@ class DiscretizationSection(Strict):
 class SolverSection(Strict):
     """IPOPT options and the globalisation strategy."""
 
-    ipopt: dict[str, str | int | float] = Field(
+    ipopt: dict[str, Annotated[str | int | float, BeforeValidator(_ipopt_value)]] = Field(
         default_factory=dict, description="options passed to IPOPT (e.g. tol, max_iter)")
     fatrop: dict[str, StrictBool | int | float | str] = Field(
         default_factory=dict, description="fatrop's own options by fatrop's names (e.g. "
