@@ -473,6 +473,42 @@ def test_exported_folder_layout_and_parameter_file(tmp_path: Path) -> None:
     assert (exp.folder / "params.txt").read_text().count("\ninitial.R ") == 1
 
 
+@pytest.mark.parametrize("backend", ["ipopt", "fatrop"])
+def test_what_a_solve_runs_once_is_generated_apart_and_compiled_at_opt_once(
+        tmp_path: Path, backend: str) -> None:
+    """The guess, the packing and the verdict's checks (with fatrop also its maps to and
+    from the stage form) are in generated_once.c, which make compiles with OPT_ONCE (-Og)
+    after CFLAGS; what runs at every iteration, and the read-out, stay in generated.c at OPT.
+    ``make OPT_ONCE=`` compiles it as the rest."""
+    if shutil.which("make") is None:
+        pytest.skip("make is not installed")
+    folder = export_c(_rigid_body(), tmp_path / "c", N=4, backend=backend).folder
+
+    def defined(file: str) -> set[str]:
+        text = (folder / file).read_text()
+        return {n for n in ("gen_guess", "gen_pack", "gen_verify", "gen_post", "gen_nlpsol",
+                            "fatrop_in", "fatrop_out", "fatrop_nlp_hess_l")
+                if f"int ocg_{n}(const casadi_real** arg" in text}
+
+    once = {"gen_guess", "gen_pack", "gen_verify"} | (
+        {"fatrop_in", "fatrop_out"} if backend == "fatrop" else set())
+    assert defined("ocg_generated_once.c") == once
+    assert defined("ocg_generated.c") == {"gen_post", "gen_nlpsol" if backend == "ipopt"
+                                          else "fatrop_nlp_hess_l"}
+
+    def compile_lines(*args: str) -> dict[str, str]:
+        out = subprocess.run(["make", "-n", "-C", str(folder), "CFLAGS=-O1", *args],
+                             capture_output=True, text=True, check=True).stdout
+        return {line.split(" -c ")[1].split()[0]: line for line in out.splitlines()
+                if " -c " in line}
+
+    lines = compile_lines()
+    assert lines["ocg_generated_once.c"].split(" -c ")[0].endswith("-O1 -Og")
+    assert all("-Og" not in line for name, line in lines.items()
+               if name != "ocg_generated_once.c")
+    assert "-Og" not in compile_lines("OPT_ONCE=")["ocg_generated_once.c"]
+
+
 def test_a_fatrop_export_runs_the_driver_not_casadis_nlpsol(tmp_path: Path,
                                                             monkeypatch) -> None:
     """With solver.backend fatrop the export writes fatrop's driver and its tables, in time

@@ -9,6 +9,7 @@ from pathlib import Path
 import casadi as ca
 
 from ..errors import ExportError
+from ..solve.parallel import cores
 
 
 def casadi_dir() -> Path:
@@ -32,14 +33,16 @@ def ipopt_paths(lib: str | Path | None, include: str | Path | None) -> tuple[Pat
 
 def make(folder: str | Path, cflags: str = "", target: str = "solve",
          timeout: float = 600.0) -> Path:
-    """Run ``make -C folder target`` with extra ``CFLAGS``; the path of the built target
-    (``solve``, or a program ``target`` built from ``folder/target.c`` and libocg.a)."""
+    """Run ``make -C folder target`` with extra ``CFLAGS``, one job per core (the generated
+    files compile apart); the path of the built target (``solve``, or a program ``target``
+    built from ``folder/target.c`` and libocg.a)."""
     folder = Path(folder)
     tool = shutil.which("make")
     if tool is None:
         raise ExportError("`make` was not found on PATH; install make and a C compiler "
                           "(e.g. apt-get install build-essential) or build by hand (README)")
-    cmd = [tool, "-C", str(folder), target] + ([f"CFLAGS={cflags}"] if cflags else [])
+    cmd = [tool, "-C", str(folder), f"-j{cores()}", target] + \
+        ([f"CFLAGS={cflags}"] if cflags else [])
     r = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
     if r.returncode != 0:
         tail = "\n".join((r.stdout + r.stderr).strip().splitlines()[-20:])

@@ -4,11 +4,11 @@
 template of ``c_templates/`` (``@KEY@`` placeholders, :func:`_fill`; Python computes only the
 values) except CasADi's own output:
 
-- ``{prefix}generated.c/.h``, ``{prefix}generated_warm.c/.h``: the CasADi-generated
-  Functions of :mod:`~ocgroupoid.export.functions` (the solvers, the guess, the packing of a
-  parameter file, the read-out, the verdict's checks), after ``prelude.c.in``; with
-  ``solver.backend: fatrop`` the solvers are fatrop's driver instead (no
-  ``generated_warm``; :mod:`~ocgroupoid.export.fatrop`);
+- ``{prefix}generated.c/.h``, ``{prefix}generated_warm.c/.h``, ``{prefix}generated_once.c/.h``:
+  the CasADi-generated Functions of :mod:`~ocgroupoid.export.functions` (the solvers and the
+  read-out; the warm solver; what a solve runs once: the guess, the packing of a parameter
+  file, the verdict's checks), after ``prelude.c.in``; with ``solver.backend: fatrop`` the
+  solvers are fatrop's driver instead (no ``generated_warm``; :mod:`~ocgroupoid.export.fatrop`);
 - the library, one job a file: ``{prefix}solver.c/.h`` the public API, ``{prefix}json.c``
   the JSON writer, ``{prefix}functions.c/.h`` the calls of the generated functions,
   ``{prefix}hooks.c/.h`` with ``{prefix}ipopt_hooks.h`` what the backend reports of a solve,

@@ -49,18 +49,19 @@ def exported(tr: Transcription) -> Exported:
     return tr.fatrop.exported
 
 
-def functions(tr: Transcription, prefix: str) -> tuple[ca.Function, ...]:
+def functions(tr: Transcription, prefix: str
+              ) -> tuple[tuple[ca.Function, ...], tuple[ca.Function, ...]]:
     """The Functions CasADi generates for the exported fatrop solver: the stage form's five
-    (``{prefix}fatrop_nlp_f`` ...), ``{prefix}fatrop_in`` and ``{prefix}fatrop_out``."""
+    (``{prefix}fatrop_nlp_f`` ...), which fatrop evaluates at every iteration, and the two
+    maps a solve runs once, ``{prefix}fatrop_in`` and ``{prefix}fatrop_out``."""
     e = exported(tr)
-    named = [(f"fatrop_{name}", e.functions[name]) for name in NLP_FUNCTIONS]
-    named += [("fatrop_in", e.arguments), ("fatrop_out", e.unscaled)]
-    out = []
-    for name, fn in named:
+
+    def named(name: str, fn: ca.Function) -> ca.Function:
         ins = fn.mx_in()
-        out.append(ca.Function(f"{prefix}{name}", ins, fn.call(ins), fn.name_in(),
-                               fn.name_out()))
-    return tuple(out)
+        return ca.Function(f"{prefix}{name}", ins, fn.call(ins), fn.name_in(), fn.name_out())
+
+    return (tuple(named(f"fatrop_{name}", e.functions[name]) for name in NLP_FUNCTIONS),
+            (named("fatrop_in", e.arguments), named("fatrop_out", e.unscaled)))
 
 
 def values(tr: Transcription) -> dict[str, Any]:

@@ -103,21 +103,29 @@ def solver_function(tr: Transcription, prefix: str, warm: bool = False) -> ca.Fu
 
 def generate(tr: Transcription, ipopt: dict[str, Any] | None, prefix: str,
              prelude: str, loop: Sequence[ca.Function] = ()) -> dict[str, str]:
-    """The CasADi-generated ``{prefix}generated.c/.h``; with IPOPT ``{prefix}generated_warm.c/.h``
-    (the warm-start solver: a second IPOPT instance, whose generated callbacks would clash
-    with the first's in one file), with fatrop the Functions its driver runs instead of the
-    solvers (:mod:`~ocgroupoid.export.fatrop`, which writes the solvers); with ``loop``
-    (:mod:`~ocgroupoid.export.mpc`) ``{prefix}generated_mpc.c/.h`` of its Functions; each C
-    file after ``prelude``; generated in a temporary folder. The file name is CasADi's prefix
-    of its internal symbols."""
-    rest = (guess_function(tr, prefix), pack_function(tr, prefix), post_function(tr, prefix),
+    """The CasADi-generated C files, each after ``prelude``, generated in a temporary folder:
+    ``{prefix}generated.c/.h``, what runs at every iteration of a solve (IPOPT's solver, or
+    with fatrop the Functions its driver runs instead, :mod:`~ocgroupoid.export.fatrop`) and
+    the read-out, which the closed loop runs at every sample; with IPOPT
+    ``{prefix}generated_warm.c/.h``, the warm-start solver (a second IPOPT instance, whose
+    generated callbacks would clash with the first's in one file);
+    ``{prefix}generated_once.c/.h``, what a solve runs once (the guess, the packing of a
+    parameter file, the verdict's checks; with fatrop the maps to and from its stage form),
+    which the Makefile compiles with less optimisation (``OPT_ONCE``); with ``loop``
+    (:mod:`~ocgroupoid.export.mpc`) ``{prefix}generated_mpc.c/.h`` of its Functions. The file
+    name is CasADi's prefix of its internal symbols."""
+    post = post_function(tr, prefix)
+    once = (guess_function(tr, prefix), pack_function(tr, prefix),
             verify_export(tr, ipopt, prefix))
     groups: list[tuple[str, Sequence[ca.Function]]]
     if tr.fatrop is None:
-        groups = [(f"{prefix}generated", (solver_function(tr, prefix), *rest)),
-                  (f"{prefix}generated_warm", (solver_function(tr, prefix, warm=True),))]
+        groups = [(f"{prefix}generated", (solver_function(tr, prefix), post)),
+                  (f"{prefix}generated_warm", (solver_function(tr, prefix, warm=True),)),
+                  (f"{prefix}generated_once", once)]
     else:
-        groups = [(f"{prefix}generated", (*exported_fatrop.functions(tr, prefix), *rest))]
+        stage, maps = exported_fatrop.functions(tr, prefix)
+        groups = [(f"{prefix}generated", (*stage, post)),
+                  (f"{prefix}generated_once", (*maps, *once))]
     if loop:
         groups.append((f"{prefix}generated_mpc", loop))
     out = {}
