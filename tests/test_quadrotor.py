@@ -334,7 +334,7 @@ def test_continuation_reports_a_grid_that_lands_above_the_coarse_minimum(monkeyp
     """The first interpolation onto the fine grid is spoiled (the long way round): the fine
     grid lands above the minimum the coarse grid found; the solver bridges through the
     doublings, keeps the better solution and says so."""
-    from ocgroupoid.solve import compiled as solver_module
+    from ocgroupoid.solve import compiled as solver_module, multipliers
     from ocgroupoid.systems.rigid_body import rigid_body
 
     real = solver_module.interpolate
@@ -347,7 +347,8 @@ def test_continuation_reports_a_grid_that_lands_above_the_coarse_minimum(monkeyp
             g.xi = -g.xi * 1.5  # the other way round
         return g
 
-    monkeypatch.setattr(solver_module, "interpolate", spoiled)
+    monkeypatch.setattr(solver_module, "interpolate", spoiled)  # the bridge's
+    monkeypatch.setattr(multipliers, "interpolate", spoiled)  # the next grid's start
     pb = rigid_body()
     sol = og.compile_problem(pb, N=64).solve(continuation=[16])
     notes = sol.diagnostics.get("continuation", [])

@@ -64,6 +64,9 @@ class Guess:
     #: the horizon the velocities were made for (a coarser grid's solved T): a free horizon
     #: starts there rather than at the problem's guess, so the path keeps its length
     T: float | None = None
+    #: a warm start carried from a coarser grid: the same start without its multipliers,
+    #: solved instead if the warm start fails (:mod:`~ocgroupoid.solve.multipliers`)
+    primal: Guess | None = None
 
 
 def casadi_name(name: str) -> str:

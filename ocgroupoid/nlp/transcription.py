@@ -110,9 +110,10 @@ class Transcription(NonlinearProgram):
 
     def start_point(self, guess: Guess, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The NLP point a solve starts from, and its parameters: a free horizon's guess is
-        the guess's T when it has one (a coarser grid's solved T)."""
+        the guess's T when it has one (a coarser grid's solved T, also with the whole point
+        carried from it)."""
         p = np.asarray(p, dtype=float)
-        if guess.T is not None and self.problem.T_free and guess.x is None:
+        if guess.T is not None and self.problem.T_free:
             p = p.copy()
             p[self.layout.p_slices["T"]] = guess.T
         x0 = guess.x if guess.x is not None and guess.x.size == self.nx else self.point(guess, p)

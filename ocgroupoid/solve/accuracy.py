@@ -1,10 +1,10 @@
 """Accuracy on demand: the smallest grid whose estimated error meets a target.
 
 ``solve_to_accuracy`` (a problem file's ``horizon.N: auto``) solves on N = N_min, 2 N_min,
-4 N_min, ... up to N_max, each grid warm-started from the last verified one (interpolated, as
-``solver.continuation`` does; the multi-start runs until a grid is verified: a grid too
-coarse for the motion is no seed), and stops at the first grid whose solution is verified
-and meets the targets:
+4 N_min, ... up to N_max, each grid warm-started from the last verified one (interpolated with
+its multipliers, as ``solver.continuation`` does; the multi-start runs until a grid is
+verified: a grid too coarse for the motion is no seed), and stops at the first grid whose
+solution is verified and meets the targets:
 
 * ``accuracy``: the relative cost error, estimated by Richardson from this grid and the
   previous one (:mod:`~ocgroupoid.verify.richardson`), ``|J_N - J_N/2| / (2^p - 1) / |J_N|``.
@@ -43,7 +43,7 @@ from ..nlp.shortcuts import choose
 from ..verify.diagnostics import replay_of
 from ..verify.richardson import estimate as richardson_estimate, observed_order
 from .compiled import CompiledProblem, Progress
-from .guesses import interpolate
+from .multipliers import onto
 from .solution import Solution
 
 #: the schemes ``scheme="auto"`` tries, in this order
@@ -189,7 +189,8 @@ def _estimate(prior: list[Level], sol: Solution, replay_error: float | None, nom
 def _solve_grid(problem: Problem, scheme: str, N: int, search: Search,
                 seed: tuple[CompiledProblem, Solution] | None, progress: Progress
                 ) -> tuple[CompiledProblem, Solution]:
-    """One grid: from ``seed`` (the last verified grid, interpolated), or with the
+    """One grid: from ``seed`` (the last verified grid, interpolated, with its multipliers
+    where they carry over: :func:`~ocgroupoid.solve.multipliers.onto`), or with the
     multi-start when there is none."""
     progress(f"{scheme}, N={N}: building the NLP")
     solver = CompiledProblem(problem, replace(search.method, N=N, scheme=scheme), search.options)
@@ -203,7 +204,8 @@ def _solve_grid(problem: Problem, scheme: str, N: int, search: Search,
 
     if seed is None:
         return solver, solver.solve(**search.values, progress=where)
-    guess = interpolate(seed[0].transcription, seed[1].x, seed[1].p, N)
+    tr = solver.transcription
+    guess = onto(seed[0].transcription, seed[1], tr, tr.pack(**search.values))
     return solver, solver.solve(**search.values, guess=guess, progress=where)
 
 

@@ -36,6 +36,7 @@ from ..verify.verdict import REPLAY_TOLERANCE, scales
 from . import parallel
 from .guesses import as_guess, geodesic_guesses, interpolate, model_guesses, perturbed_guesses
 from .interrupt import Interrupt, interruptible
+from .multipliers import onto
 from .readout import control_ppoly, make_solution
 from .solution import Solution
 
@@ -224,6 +225,16 @@ class CompiledProblem:
                 level, report = self._starts(tr, starts, p, progress, interrupt, deadline,
                                              through)
                 best = min(level, key=lambda r: (not r.success, r.cost))
+                primal = starts[0].primal
+                if primal is not None and not best.success and not interrupt.requested and \
+                        time.monotonic() < deadline:  # the carried warm start failed
+                    again, _ = self._starts(tr, [primal], p, progress, interrupt, deadline,
+                                            through)
+                    notes.append(f"N={n}: the warm start from {starts[0].label} ended "
+                                 f"{best.status}; solved again without the multipliers "
+                                 f"({again[0].status})")
+                    level = [*level, *again]  # a rescue follows only if this failed too
+                    best = min(level, key=lambda r: (not r.success, r.cost))
                 if cheaper and tr.fatrop is None and _rescuable(level) and \
                         not interrupt.requested and time.monotonic() < deadline:
                     via = self._at(n, cheaper)
@@ -296,11 +307,15 @@ class CompiledProblem:
     def _starts_of(self, tr: Transcription, p: np.ndarray,
                    source: tuple[Transcription, RawResult] | None, given: Any,
                    multistart: bool | int) -> list[Guess]:
-        """The starts of one grid: the last solved grid's solution interpolated onto it,
+        """The starts of one grid: the last solved grid's solution interpolated onto it (with
+        its multipliers where they carry over, :func:`~ocgroupoid.solve.multipliers.onto`),
         else the guess given, else the geodesic (and with ``multistart`` every) guess."""
         if source is not None:
-            return [interpolate(source[0], source[1].x, source[1].p, tr.N)]
+            return [onto(source[0], source[1], tr, p)]
         if given is not None:
+            if isinstance(given, Guess) and given.primal is not None and \
+                    given.x is not None and given.x.size != tr.nx:  # a rescue's scheme
+                given = given.primal
             return [as_guess(given, tr, p)]
         return self.guesses(tr, p, multistart)
 
@@ -532,8 +547,8 @@ def _rescuable(level: list[RawResult]) -> bool:
 
 def _whole_point(guess: Any) -> bool:
     """Whether a given guess is a point of one NLP (a warm start), which another scheme's
-    cannot start from."""
-    return isinstance(guess, Guess) and guess.x is not None
+    cannot start from (a start carried from a coarser grid can: its velocities)."""
+    return isinstance(guess, Guess) and guess.x is not None and guess.primal is None
 
 
 def landing(tr: Transcription, r: RawResult) -> float:

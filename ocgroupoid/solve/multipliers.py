@@ -1,0 +1,106 @@
+"""A coarse grid's multipliers carried onto a finer grid: with the interpolated point, IPOPT's
+primal-dual warm start of the finer grid (continuation, accuracy on demand).
+
+The coarse solution's velocities interpolated onto the finer grid (:func:`interpolate`) start
+the finer grid near its solution, but IPOPT started there from its own initial barrier
+parameter and multipliers moves away before it comes back: ``quadrotor_min_time`` (order4)
+from its N = 256 solution took 330 iterations (51.6 s) at N = 512, its barrier parameter down
+to 1e-8.6 while the cost was still far off. With the coarse grid's multipliers carried over,
+IPOPT's warm start (:attr:`~ocgroupoid.nlp.backends.ipopt.IpoptBackend.warm_solver`: the
+barrier parameter at 1e-6, the bound pushes at 1e-9) took 25 iterations (2.75 s) to the same
+minimum.
+
+Every constraint block keeps its meaning from grid to grid, so each of its rows is a function
+of time sampled at the block's columns (measured between the converged solutions on N and 2N,
+2026-12-04, ``quadrotor_min_time`` and the cart-pole, median ratios): the multipliers of the
+discrete Euler-Lagrange equations (:attr:`Kind.PATH <ocgroupoid.nlp.assembly.Kind>`, the
+seeds' lambda^k), of the reconstruction and of the final conditions keep their size (ratio
+0.99-1.01); those of the bounds, imposed at points of the intervals, are weights of a sum over
+the points and halve with h (ratio 0.49 and 0.46, the cart-pole's 0.29 on N = 64 across its
+switches). The variables' own bounds (the free horizon's limits, free boundary values) are the
+same variables on every grid, their multipliers copied.
+"""
+
+from __future__ import annotations
+
+from typing import Protocol
+
+import numpy as np
+
+from ..nlp.assembly import Block, Kind
+from ..nlp.transcription import Guess, Transcription
+from .guesses import interpolate
+
+#: the kinds of constraint blocks whose multipliers are carried; a block of another kind (the
+#: mesh of adaptive steps) leaves the finer grid without multipliers
+CARRIED = (Kind.RECONSTRUCTION, Kind.PATH, Kind.FINAL, Kind.FINAL_CONDITION, Kind.INEQUALITY,
+           Kind.COST)
+
+
+class Solved(Protocol):
+    """A solution on a grid: its point, parameters and multipliers."""
+
+    x: np.ndarray
+    p: np.ndarray
+    lam_g: np.ndarray
+    lam_x: np.ndarray
+
+
+def _times(block: Block, columns: int, N: int) -> np.ndarray | None:
+    """The times of a block's columns as fractions of T: its own, or the interval midpoints
+    of a block with one column per interval (the reconstruction); None when neither."""
+    times = np.asarray(block.times, dtype=float)
+    if times.size == columns:
+        return times
+    if columns == N:
+        return (np.arange(N) + 0.5) / N
+    return None
+
+
+def carried(coarse: Transcription, lam_g: np.ndarray, lam_x: np.ndarray,
+            fine: Transcription) -> tuple[np.ndarray, np.ndarray] | None:
+    """The coarse grid's multipliers ``lam_g``, ``lam_x`` on the fine grid (module
+    docstring): each row of a block interpolated linearly in time (a block of one column
+    copied), a bound's scaled by the ratio of the steps, coarse N / fine N; the variables'
+    own bounds copied (the stage variables have none). None where the grids' blocks do not
+    correspond (another scheme, retraction or rule, adaptive steps): the fine grid then
+    starts without them."""
+    a, b = coarse.disc, fine.disc
+    if (a.scheme, a.retraction, a.rule) != (b.scheme, b.retraction, b.rule) \
+            or coarse.layout.phases or fine.layout.phases or len(coarse.blocks) != len(fine.blocks) \
+            or coarse.nx - coarse.layout.stage.size != fine.nx - fine.layout.stage.size:
+        return None
+    out = np.zeros(fine.ng)
+    for bc, bf in zip(coarse.blocks, fine.blocks):
+        rc, rf = bc.g_rows, bf.g_rows
+        if bc.name != bf.name or bc.kind is not bf.kind or bc.kind not in CARRIED \
+                or rc.shape[0] != rf.shape[0]:
+            return None
+        if rc.size == 0:
+            continue
+        scale = coarse.N / fine.N if bc.kind is Kind.INEQUALITY else 1.0
+        values = lam_g[rc]
+        if rc.shape[1] == 1 and rf.shape[1] == 1:
+            out[rf] = scale * values
+            continue
+        tc, tf = _times(bc, rc.shape[1], coarse.N), _times(bf, rf.shape[1], fine.N)
+        if tc is None or tf is None:
+            return None
+        out[rf] = scale * np.array([np.interp(tf, tc, row) for row in values])
+    x_lam = np.zeros(fine.nx)
+    x_lam[fine.layout.stage.size:] = lam_x[coarse.layout.stage.size:]
+    return out, x_lam
+
+
+def onto(coarse: Transcription, solved: Solved, fine: Transcription, p: np.ndarray) -> Guess:
+    """The start of a finer grid from a coarse grid's solution: its velocities interpolated
+    (:func:`interpolate`) and, where the fine grid is solved by IPOPT and the multipliers
+    carry over (:func:`carried`), the whole point with them: IPOPT's primal-dual warm start,
+    which falls back to the interpolated velocities alone (``Guess.primal``) if it fails."""
+    primal = interpolate(coarse, solved.x, solved.p, fine.N)
+    duals = carried(coarse, solved.lam_g, solved.lam_x, fine) if fine.fatrop is None else None
+    if duals is None:
+        return primal
+    x0, _ = fine.start_point(primal, p)
+    return Guess(f"{primal.label}, with its multipliers", primal.xi, np.asarray(x0, dtype=float),
+                 duals[0], duals[1], T=primal.T, primal=primal)

@@ -1,0 +1,139 @@
+"""A coarse grid's multipliers carried onto a finer grid (ocgroupoid.solve.multipliers): they
+converge to the finer grid's own as the grids are refined, block by block, with the bounds'
+scaled by the ratio of the steps; they carry only between grids of one scheme and to IPOPT;
+the warm start they give is what continuation and accuracy on demand run, and a failed warm
+start is solved again without them."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import ocgroupoid as og
+from ocgroupoid import files
+from ocgroupoid.nlp.assembly import Kind
+from ocgroupoid.nlp.transcription import RawResult, Transcription
+from ocgroupoid.solve.multipliers import carried, onto
+
+QMT = Path(__file__).resolve().parent.parent / "problems" / "quadrotor_min_time.yaml"
+
+
+def compiled(N: int, *sets: str) -> og.CompiledProblem:
+    """quadrotor_min_time on N intervals: bounds, a free horizon, final conditions."""
+    cfg = files.load(QMT, [f"horizon.N={N}", *sets])
+    return og.compile_problem(files.build(cfg), files.method(cfg), files.options(cfg))
+
+
+@pytest.fixture(scope="module")
+def solved() -> dict[int, tuple[Transcription, og.Solution]]:
+    out = {}
+    for N in (16, 32, 64):
+        c = compiled(N)
+        sol = c.solve(multistart=False)
+        assert sol.success, sol.status
+        out[N] = (c.transcription, sol)
+    return out
+
+
+def errors(solved: dict[int, tuple[Transcription, og.Solution]], N: int,
+           bound_scale: float = 1.0) -> dict[str, float]:
+    """Per block of the grid 2N: |carried from N - its own| / |its own|, the bounds' carried
+    multipliers times ``bound_scale``."""
+    (tc, sc), (tf, sf) = solved[N], solved[2 * N]
+    duals = carried(tc, sc.lam_g, sc.lam_x, tf)
+    assert duals is not None
+    lam_g, lam_x = duals
+    assert lam_g.shape == sf.lam_g.shape and lam_x.shape == sf.lam_x.shape
+    assert np.allclose(lam_x, sf.lam_x, rtol=0.0, atol=1e-9)  # the free horizon's bounds
+    out = {}
+    for b in tf.blocks:
+        rows = b.g_rows
+        if rows.size:
+            scale = bound_scale if b.kind is Kind.INEQUALITY else 1.0
+            out[b.name] = float(np.linalg.norm(scale * lam_g[rows] - sf.lam_g[rows])
+                                / np.linalg.norm(sf.lam_g[rows]))
+    return out
+
+
+def test_carried_multipliers_converge_to_the_finer_grids_own(solved) -> None:
+    """Every block's carried multipliers approach the finer grid's own under refinement
+    (measured: 0.06-0.23 from N = 16 to 32, 0.01-0.10 from 32 to 64); the bounds' only with
+    their scaling by the steps' ratio: unscaled they are off by their own size."""
+    coarse, fine = errors(solved, 16), errors(solved, 32)
+    assert set(fine) == {"recon", "interval", "interval_bounds", "final"}
+    for name in fine:
+        assert fine[name] < coarse[name], (name, coarse[name], fine[name])
+        assert fine[name] < 0.15, (name, fine[name])
+    unscaled = errors(solved, 32, bound_scale=2.0)  # undo the scaling by 32/64
+    assert unscaled["interval_bounds"] > 0.5
+
+
+def test_multipliers_carry_between_grids_of_one_scheme_to_ipopt_only(solved) -> None:
+    tc, sc = solved[16]
+    order2 = compiled(32, "discretization.scheme=order2").transcription
+    assert carried(tc, sc.lam_g, sc.lam_x, order2) is None
+    p = solved[32][0].pack()
+    warm = onto(tc, sc, solved[32][0], p)
+    assert warm.x is not None and warm.lam_g is not None and warm.primal is not None
+    assert warm.label == "interpolated from N=16, with its multipliers"
+    assert warm.primal.x is None and warm.T == pytest.approx(sc.T)
+    fatrop = compiled(32, "solver.backend=fatrop").transcription
+    start = onto(tc, sc, fatrop, fatrop.pack())
+    assert start.x is None and start.lam_g is None and start.primal is None
+
+
+def test_continuation_starts_the_finer_grid_warm_and_lands_on_its_minimum(solved) -> None:
+    """The continuation's last grid starts from the coarse point and multipliers and ends at
+    the minimum a direct solve of that grid finds."""
+    sol = compiled(64).solve(multistart=False, continuation=[32])
+    assert sol.success
+    assert sol.discretization["start"] == "interpolated from N=32, with its multipliers"
+    assert sol.cost == pytest.approx(solved[64][1].cost, rel=1e-9)
+    assert "continuation" not in sol.diagnostics  # nothing failed
+
+
+def test_a_failed_warm_start_is_solved_again_without_the_multipliers(monkeypatch) -> None:
+    """The warm start is made to fail: the grid is solved again from the interpolated
+    velocities alone, to the minimum, and the note says so."""
+    real = Transcription.solve
+    tried: list[str] = []
+
+    def failing(self, guess, *args, **kwargs):  # type: ignore[no-untyped-def]
+        r = real(self, guess, *args, **kwargs)
+        tried.append(guess.label)
+        if guess.lam_g is not None:
+            return RawResult(guess.label, r.x, r.p, r.lam_g, r.cost, "Maximum_Iterations_Exceeded",
+                             False, 3000, r.solve_seconds, r.lam_x)
+        return r
+
+    monkeypatch.setattr(Transcription, "solve", failing)
+    sol = compiled(32).solve(multistart=False, continuation=[16])
+    assert tried[-2:] == ["interpolated from N=16, with its multipliers",
+                          "interpolated from N=16"]
+    assert sol.success and sol.discretization["start"] == "interpolated from N=16"
+    notes = sol.diagnostics["continuation"]
+    assert any("ended Maximum_Iterations_Exceeded; solved again without the multipliers "
+               "(Solve_Succeeded)" in n for n in notes), notes
+
+
+def test_accuracy_on_demand_warm_starts_each_grid_from_the_last(monkeypatch) -> None:
+    """Accuracy on demand starts every grid after the first from the last one's point and
+    multipliers, and meets its target."""
+    from ocgroupoid.solve import accuracy
+
+    starts: list[str] = []
+
+    def recorded(*args, **kwargs):  # type: ignore[no-untyped-def]
+        guess = onto(*args, **kwargs)
+        starts.append(guess.label)
+        return guess
+
+    monkeypatch.setattr(accuracy, "onto", recorded)
+    cfg = files.load(QMT, ["horizon.N=16"])
+    sol = og.solve_to_accuracy(files.build(cfg), accuracy=1e-4, N_min=16, N_max=128,
+                               method=files.method(cfg), options=files.options(cfg),
+                               multistart=False)
+    assert sol.success and sol.error_estimate is not None and sol.error_estimate <= 1e-4
+    assert starts and all(s.endswith("with its multipliers") for s in starts), starts
