@@ -25,7 +25,7 @@ from rich.table import Table
 
 import ocgroupoid as og
 from ocgroupoid import files
-from ocgroupoid.bench.chart import save_png
+from ocgroupoid.bench.chart import ratio_bars
 from ocgroupoid.bench.record import write_summary
 from ocgroupoid.bench.script import arguments, steps
 from ocgroupoid.solve.guesses import interpolate
@@ -72,32 +72,9 @@ def row(path: Path, N: int, repeats: int, step: Any) -> dict[str, Any]:
 
 def chart(rows: list[dict[str, Any]], path: Path) -> Path:
     """The cold time over the warm time of the grid N, per file, one bar per N."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    names = list(dict.fromkeys(r["file"] for r in rows))
-    Ns = sorted({r["N"] for r in rows})
-    fig, ax = plt.subplots(figsize=(10, 4.5), layout="constrained")
-    width = 0.8 / len(Ns)
-    for j, N in enumerate(Ns):
-        xs, ys = [], []
-        for i, name in enumerate(names):
-            r = next((r for r in rows if r["file"] == name and r["N"] == N), None)
-            if r and r.get("ratio"):
-                xs.append(i + (j - (len(Ns) - 1) / 2) * width)
-                ys.append(r["ratio"])
-        ax.bar(xs, ys, width, label=f"N = {N} (from N = {N // 2})", color=f"C{j}")
-    ax.axhline(1.0, color="k", lw=0.8)
-    ax.set_yscale("log")
-    ax.set_xticks(range(len(names)), names, rotation=30, ha="right", fontsize=8)
-    ax.set_ylabel("time without / with the multipliers")
-    ax.set_title("IPOPT from the coarse grid's solution: > 1 where carrying its multipliers "
-                 "pays", fontsize=10)
-    ax.grid(True, axis="y", which="both", alpha=0.3)
-    ax.legend(fontsize=8)
-    return save_png(fig, path, 110)
+    return ratio_bars(rows, path, "time without / with the multipliers",
+                      "IPOPT from the coarse grid's solution: > 1 where carrying its "
+                      "multipliers pays", "N = {N} (from N = {half})")
 
 
 def main() -> None:

@@ -22,7 +22,7 @@ from rich.console import Console
 from rich.table import Table
 
 from ocgroupoid import files
-from ocgroupoid.bench.chart import save_png
+from ocgroupoid.bench.chart import ratio_bars
 from ocgroupoid.bench.methods import Method
 from ocgroupoid.bench.record import write_summary
 from ocgroupoid.bench.script import arguments, cell, record, steps
@@ -38,32 +38,9 @@ QUICK_FILES, QUICK_NS = ("plate_ball_rotating",), (32,)
 
 def chart(rows: list[dict[str, Any]], path: Path) -> Path:
     """The cold time over the coarse-first time, per file, one bar per N."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    names = list(dict.fromkeys(r["file"] for r in rows))
-    Ns = sorted({r["N"] for r in rows})
-    fig, ax = plt.subplots(figsize=(10, 4.5), layout="constrained")
-    width = 0.8 / len(Ns)
-    for j, N in enumerate(Ns):
-        xs, ys = [], []
-        for i, name in enumerate(names):
-            r = next((r for r in rows if r["file"] == name and r["N"] == N), None)
-            if r and r.get("ratio"):
-                xs.append(i + (j - (len(Ns) - 1) / 2) * width)
-                ys.append(r["ratio"])
-        ax.bar(xs, ys, width, label=f"N = {N}", color=f"C{j}")
-    ax.axhline(1.0, color="k", lw=0.8)
-    ax.set_yscale("log")
-    ax.set_xticks(range(len(names)), names, rotation=30, ha="right", fontsize=8)
-    ax.set_ylabel("cold time / time with N/4 first")
-    ax.set_title("order4, fatrop, jit, from the first guess: > 1 where a coarse grid first pays",
-                 fontsize=10)
-    ax.grid(True, axis="y", which="both", alpha=0.3)
-    ax.legend(fontsize=8)
-    return save_png(fig, path, 110)
+    return ratio_bars(rows, path, "cold time / time with N/4 first",
+                      "order4, fatrop, jit, from the first guess: > 1 where a coarse grid "
+                      "first pays")
 
 
 def main() -> None:

@@ -179,3 +179,34 @@ def work_precision_grid(summaries: list[dict[str, Any]], path: Path, dpi: int = 
             ax.legend(fontsize=7)
     fig.suptitle("Work-precision: lower left is better")
     return save_png(fig, path, dpi)
+
+
+def ratio_bars(rows: list[dict[str, Any]], path: Path, ylabel: str, title: str,
+               label: str = "N = {N}") -> Path:
+    """A ratio per file (``rows``: ``file``, ``N``, ``ratio``, None where there is none), one
+    bar per N (``label`` formatted with N and its half), on a log scale around 1."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    names = list(dict.fromkeys(r["file"] for r in rows))
+    Ns = sorted({r["N"] for r in rows})
+    fig, ax = plt.subplots(figsize=(10, 4.5), layout="constrained")
+    width = 0.8 / len(Ns)
+    for j, N in enumerate(Ns):
+        xs, ys = [], []
+        for i, name in enumerate(names):
+            r = next((r for r in rows if r["file"] == name and r["N"] == N), None)
+            if r and r.get("ratio"):
+                xs.append(i + (j - (len(Ns) - 1) / 2) * width)
+                ys.append(r["ratio"])
+        ax.bar(xs, ys, width, label=label.format(N=N, half=N // 2), color=f"C{j}")
+    ax.axhline(1.0, color="k", lw=0.8)
+    ax.set_yscale("log")
+    ax.set_xticks(range(len(names)), names, rotation=30, ha="right", fontsize=8)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title, fontsize=10)
+    ax.grid(True, axis="y", which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    return save_png(fig, path, 110)

@@ -4,7 +4,8 @@
    alone when the problem file turns multi-start off): the best minimum, and the first start
    in the multi-start's order that reaches it (the timed solves start there); the distinct
    minima met (:mod:`~ocgroupoid.bench.minimum` tells rows in another one by them).
-2. order4 continued to N/4, N/2, N (each grid started from the last, interpolated), then
+2. order4 continued to N/4, N/2, N (each grid started from the last, interpolated, with its
+   multipliers where IPOPT solves it: :func:`~ocgroupoid.solve.multipliers.onto`), then
    Richardson for order 4 (:mod:`~ocgroupoid.verify.richardson`):
    ``J_ref = J_N + (J_N - J_{N/2}) / 15``.
 3. The check, another family: RK4 shooting on unit quaternions (``rk4_quat``) on N/4, N/2
@@ -29,6 +30,7 @@ from ..errors import ConfigError, SolverError
 from ..model.problem import Problem
 from ..nlp.transcription import RawResult
 from ..solve import Solution, distinct_minima, interpolate, make_solution
+from ..solve.multipliers import onto
 from ..verify.richardson import observed_order, relative, richardson_error
 from .methods import Method
 from .minimum import SAME_COST
@@ -88,8 +90,9 @@ def reference(problem: Problem, setting: Setting, N: int, multistart: bool,
     fine: dict[int, tuple[Any, Solution]] = {}
     for n in (N // 4, N // 2, N):
         step(f"reference: order4 N={n}")
-        guess = interpolate(solver.transcription, sol.x, sol.p, n)
+        coarse = solver.transcription
         solver = setting.compile(problem, Method("order4"), n)
+        guess = onto(coarse, sol, solver.transcription, solver.transcription.pack())
         sol = _solved(solver.solve(guess=guess, replay=False), f"order4, N={n}")
         fine[n] = (solver.transcription, sol)
     J4 = [fine[n][1].cost for n in (N // 4, N // 2, N)]

@@ -67,7 +67,8 @@ def carried(coarse: Transcription, lam_g: np.ndarray, lam_x: np.ndarray,
     starts without them."""
     a, b = coarse.disc, fine.disc
     if (a.scheme, a.retraction, a.rule) != (b.scheme, b.retraction, b.rule) \
-            or coarse.layout.phases or fine.layout.phases or len(coarse.blocks) != len(fine.blocks) \
+            or coarse.layout.phases or fine.layout.phases \
+            or len(coarse.blocks) != len(fine.blocks) \
             or coarse.nx - coarse.layout.stage.size != fine.nx - fine.layout.stage.size:
         return None
     out = np.zeros(fine.ng)
