@@ -70,6 +70,31 @@ def test_carried_multipliers_converge_to_the_finer_grids_own(solved) -> None:
     assert unscaled["interval_bounds"] > 0.5
 
 
+def test_a_switching_control_is_carried_point_by_point() -> None:
+    """The cart-pole's force switches between its bounds, which hold at four points of every
+    interval; an interval's end and the next one's start share a time but not their
+    multipliers across a switch. Carried point by point, the warm start from N = 64 takes
+    about the cold start's iterations (measured 19 against 18; with all four points
+    interpolated at once 36)."""
+    cart_pole = QMT.parent / "cart_pole.yaml"
+
+    def at(N: int) -> og.CompiledProblem:
+        cfg = files.load(cart_pole, [f"horizon.N={N}", "solver.backend=ipopt"])
+        return og.compile_problem(files.build(cfg), files.method(cfg), files.options(cfg))
+
+    coarse, fine = at(64), at(128)
+    first = coarse.solve(multistart=False)
+    tc, tf = coarse.transcription, fine.transcription
+    assert next(b for b in tf.blocks if b.kind is Kind.INEQUALITY).points == 4
+    warm_start = onto(tc, first, tf, tf.pack())
+    assert warm_start.primal is not None
+    cold = fine.solve(multistart=False, guess=warm_start.primal)
+    warm = fine.solve(multistart=False, guess=warm_start)
+    assert cold.success and warm.success
+    assert warm.cost == pytest.approx(cold.cost, rel=1e-9)
+    assert warm.iterations <= cold.iterations + 5, (warm.iterations, cold.iterations)
+
+
 def test_multipliers_carry_between_grids_of_one_scheme_to_ipopt_only(solved) -> None:
     tc, sc = solved[16]
     order2 = compiled(32, "discretization.scheme=order2").transcription
