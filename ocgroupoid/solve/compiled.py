@@ -230,7 +230,7 @@ class CompiledProblem:
                         time.monotonic() < deadline:  # the carried warm start failed
                     again, _ = self._starts(tr, [primal], p, progress, interrupt, deadline,
                                             through)
-                    notes.append(f"N={n}: the warm start from {starts[0].label} ended "
+                    notes.append(f"N={n}: the warm start ({starts[0].label}) ended "
                                  f"{best.status}; solved again without the multipliers "
                                  f"({again[0].status})")
                     level = [*level, *again]  # a rescue follows only if this failed too
