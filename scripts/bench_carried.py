@@ -28,7 +28,6 @@ from ocgroupoid import files
 from ocgroupoid.bench.chart import ratio_bars
 from ocgroupoid.bench.record import write_summary
 from ocgroupoid.bench.script import arguments, steps
-from ocgroupoid.solve.guesses import interpolate
 from ocgroupoid.solve.multipliers import onto
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -50,8 +49,8 @@ def row(path: Path, N: int, repeats: int, step: Any) -> dict[str, Any]:
     if first.status != "Solve_Succeeded":
         return {"file": path.stem, "N": N, "coarse_status": first.status}
     tc, tf = coarse.transcription, fine.transcription
-    starts = {"cold": interpolate(tc, first.x, first.p, N),
-              "warm": onto(tc, first, tf, tf.pack())}
+    warm = onto(tc, first, tf, tf.pack())
+    starts = {"cold": warm.primal or warm, "warm": warm}  # velocities alone; with multipliers
     runs: dict[str, list[og.Solution]] = {"cold": [], "warm": []}
     for r in range(repeats):
         for kind in (("cold", "warm") if r % 2 == 0 else ("warm", "cold")):
