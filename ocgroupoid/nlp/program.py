@@ -65,7 +65,9 @@ class Guess:
     #: starts there rather than at the problem's guess, so the path keeps its length
     T: float | None = None
     #: a warm start carried from a coarser grid: the same start without its multipliers,
-    #: solved instead if the warm start fails (:mod:`~ocgroupoid.solve.multipliers`)
+    #: solved instead if the warm start fails (:mod:`~ocgroupoid.solve.multipliers`); IPOPT
+    #: starts such a guess with larger bound pushes than a solution's own multipliers
+    #: (:data:`~ocgroupoid.nlp.backends.ipopt.CARRIED_IPOPT`)
     primal: Guess | None = None
 
 

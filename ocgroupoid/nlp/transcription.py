@@ -89,7 +89,9 @@ class Transcription(NonlinearProgram):
         """Run the backends from ``guess`` with parameters ``p`` (default: the problem's).
         With IPOPT, ``listener(iteration, objective, infeasibility)`` hears every iteration
         and stops IPOPT by returning True (status ``User_Requested_Stop``), a guess with
-        multipliers as well, which is a primal-dual warm start. fatrop has neither: it starts
+        multipliers as well, which is a primal-dual warm start (with the bound pushes of
+        :data:`~ocgroupoid.nlp.backends.ipopt.CARRIED_IPOPT` when the multipliers were
+        carried from a coarser grid: the guess has a ``primal``). fatrop has neither: it starts
         from the guess's primal point, guarded (in this process, or in a helper process where
         it cannot be: :mod:`~ocgroupoid.nlp.backends.fatrop`) and stopped at ``deadline``
         (``time.monotonic()``; default: :attr:`max_seconds` from now), after repeated NaN
@@ -102,7 +104,7 @@ class Transcription(NonlinearProgram):
             deadline = time.monotonic() + self.max_seconds
         warm = self._warm(guess)
         start = Start(x0, p, guess.lam_g if warm else None, guess.lam_x if warm else None,
-                      listener, deadline, stop or never)
+                      listener, deadline, stop or never, carried=guess.primal is not None)
         run, label = in_turn(self.backends, start, lambda x, p: float(self.f_fun(x, p)),
                              rescue)
         return RawResult(guess.label, run.x, p, run.lam_g, run.f, run.status, run.success,

@@ -60,7 +60,10 @@ class Graph(Protocol):
 class Start:
     """Where one run starts: the primal point x0 and the parameters p; the multipliers of a
     primal-dual warm start (both or neither); who hears the iterations (and may stop them);
-    the deadline (``time.monotonic()``) and a stop request (Ctrl-C)."""
+    the deadline (``time.monotonic()``) and a stop request (Ctrl-C); whether the
+    multipliers were carried from a coarser grid (:mod:`~ocgroupoid.solve.multipliers`),
+    not those of a solution of this NLP (IPOPT's
+    :data:`~ocgroupoid.nlp.backends.ipopt.CARRIED_IPOPT`)."""
 
     x0: np.ndarray
     p: np.ndarray
@@ -69,6 +72,7 @@ class Start:
     listener: Listener | None = None
     deadline: float = math.inf
     stop: Callable[[], bool] = never
+    carried: bool = False
 
     @property
     def warm(self) -> bool:

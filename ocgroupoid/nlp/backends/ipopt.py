@@ -5,7 +5,8 @@ Instances of the one NLP, all but the first built on first use: the plain solver
 Python: the exported C solver calls it), one with an iteration callback
 (:mod:`~ocgroupoid.nlp.watch`: progress, Ctrl-C and the deadline), one started from a
 primal-dual point (IPOPT's ``warm_start_init_point``) and that one with the callback (a
-warm start someone listens to: a polish after fatrop, a sweep's neighbour).
+warm start someone listens to: a polish after fatrop, a sweep's neighbour), and the two
+started from multipliers carried from a coarser grid (:data:`CARRIED_IPOPT`).
 """
 
 from __future__ import annotations
@@ -72,6 +73,22 @@ WARM_IPOPT: dict[str, Any] = {
     "ipopt.warm_start_init_point": "yes", "ipopt.warm_start_bound_push": 1e-9,
     "ipopt.warm_start_slack_bound_push": 1e-9, "ipopt.warm_start_mult_bound_push": 1e-9,
     "ipopt.mu_init": 1e-6}
+
+#: IPOPT options of a start whose multipliers were carried from a coarser grid
+#: (:mod:`~ocgroupoid.solve.multipliers`, :attr:`Start.carried`): :data:`WARM_IPOPT` with the
+#: bound pushes at 1e-5. Such a point is not near the fine grid's solution as a polish's or a
+#: controller's is: its controls, made from interpolated velocities, cross their bounds where
+#: the coarse ones switched (``quadrotor_min_time`` from N = 16 to 32: 221 rows violated by
+#: more than 1e-3, up to 24.7), and slacks pushed 1e-9 inside their bounds cut IPOPT's first
+#: steps to alpha 4e-6. Measured with IPOPT from N/2 to N = 16...256 on five bounded files
+#: (2026-12-04, pushes 1e-9 / 1e-5 / cold): ``quadrotor_min_time`` 41 / 26 / 23 iterations at
+#: N = 16, 37 / 24 / 27 at 32, 19 / 15 / 35 at 128; the cart-pole 26 / 14 / 20 at 64;
+#: ``dubins_car`` 24 / 10 / 17 at 32; fewer or as many with 1e-5 in all 25 cases. A polish
+#: after fatrop wants the small pushes (``quadrotor_min_time`` at N = 256: 7 iterations, 16
+#: with 1e-5), a controller's re-solve either (so3 and the free flyer: the same).
+CARRIED_IPOPT: dict[str, Any] = {
+    **WARM_IPOPT, "ipopt.warm_start_bound_push": 1e-5,
+    "ipopt.warm_start_slack_bound_push": 1e-5, "ipopt.warm_start_mult_bound_push": 1e-5}
 
 
 def ipopt_options(options: SolverOptions) -> dict[str, Any]:
@@ -160,15 +177,32 @@ class IpoptBackend(Backend):
         use."""
         return self._instance(WARM_IPOPT, {"iteration_callback": self.watch})
 
+    @cached_property
+    def carried_solver(self) -> ca.Function:
+        """:attr:`solver` started from multipliers carried from a coarser grid
+        (:data:`CARRIED_IPOPT`), built on first use."""
+        return self._instance(CARRIED_IPOPT)
+
+    @cached_property
+    def watched_carried_solver(self) -> ca.Function:
+        """:attr:`carried_solver` with the iteration callback (:attr:`watch`), built on first
+        use."""
+        return self._instance(CARRIED_IPOPT, {"iteration_callback": self.watch})
+
     def run(self, start: Start) -> Run:
-        """IPOPT from ``start``: warm (:attr:`warm_solver`) when it carries multipliers, and
-        watched (:attr:`watched_solver`, :attr:`watched_warm_solver`) when someone listens.
-        Its deadline is IPOPT's own ``max_wall_time`` and the listener's (which stops IPOPT
-        by returning True), warm or cold."""
-        if start.listener is None:  # (a solver built on first use is built before t0)
-            solver = self.warm_solver if start.warm else self.solver
+        """IPOPT from ``start``: warm (:attr:`warm_solver`, or :attr:`carried_solver` for
+        multipliers carried from a coarser grid) when it carries multipliers, and watched
+        (:attr:`watched_solver`, :attr:`watched_warm_solver`,
+        :attr:`watched_carried_solver`) when someone listens. Its deadline is IPOPT's own
+        ``max_wall_time`` and the listener's (which stops IPOPT by returning True), warm or
+        cold."""
+        watched = start.listener is not None  # (a solver built on first use: before t0)
+        if not start.warm:
+            solver = self.watched_solver if watched else self.solver
+        elif start.carried:
+            solver = self.watched_carried_solver if watched else self.carried_solver
         else:
-            solver = self.watched_warm_solver if start.warm else self.watched_solver
+            solver = self.watched_warm_solver if watched else self.warm_solver
         call = self._call(solver)
         t0 = time.perf_counter()
         bounds = self._call(self.bounds)(p=start.p)
