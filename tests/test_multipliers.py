@@ -6,6 +6,7 @@ start is solved again without them."""
 
 from __future__ import annotations
 
+import pickle
 from pathlib import Path
 
 import numpy as np
@@ -140,6 +141,31 @@ def test_continuation_starts_the_finer_grid_warm_and_lands_on_its_minimum(solved
     assert sol.discretization["start"] == "interpolated from N=32, with its multipliers"
     assert sol.cost == pytest.approx(solved[64][1].cost, rel=1e-9)
     assert "continuation" not in sol.diagnostics  # nothing failed
+
+
+def test_a_solution_given_as_the_guess_of_another_grid_brings_its_multipliers(solved) -> None:
+    """``solve(guess=solution)`` on a finer grid starts from the solution's multipliers too
+    (the Solution keeps its NLP's rows), lands on the minimum the direct solve finds, and
+    takes fewer iterations than from the same velocities alone (measured N = 16 to 32: 24
+    against 27; 128 to 512: 18 against 413); a solution read from its file carries no rows
+    and starts from its velocities."""
+    sc = solved[16][1]
+    assert sc.rows is not None and sc.rows.N == 16 and sc.rows.ng == sc.lam_g.size
+    fine = compiled(32)
+    warm = fine.solve(multistart=False, guess=sc)
+    assert warm.discretization["start"] == "interpolated from a solution (order4, N=16), " \
+        "with its multipliers"
+    read = og.Solution.from_json(sc.to_json())
+    assert read.rows is None
+    cold = fine.solve(multistart=False, guess=read)
+    assert cold.discretization["start"] == "interpolated from a solution (order4, N=16)"
+    assert warm.success and cold.success
+    assert warm.cost == pytest.approx(solved[32][1].cost, rel=1e-9)
+    assert cold.cost == pytest.approx(warm.cost, rel=1e-9)
+    assert warm.iterations < cold.iterations, (warm.iterations, cold.iterations)
+    again = pickle.loads(pickle.dumps(sc))  # a sweep's worker sends its solutions back
+    assert again.rows is not None and carried(again.rows, again.lam_g, again.lam_x,
+                                              solved[32][0]) is not None
 
 
 def test_a_failed_warm_start_is_solved_again_without_the_multipliers(monkeypatch) -> None:

@@ -36,7 +36,7 @@ from ..verify.verdict import REPLAY_TOLERANCE, scales
 from . import parallel
 from .guesses import as_guess, geodesic_guesses, interpolate, model_guesses, perturbed_guesses
 from .interrupt import Interrupt, interruptible
-from .multipliers import onto
+from .multipliers import onto, with_multipliers
 from .readout import control_ppoly, make_solution
 from .solution import Solution
 
@@ -171,7 +171,9 @@ class CompiledProblem:
         IPOPT's iteration. Ctrl-C stops the solve with the best point so far, ``status:
         interrupted``. ``guess``: where to start instead of the geodesic guesses: an
         :class:`og.Guess` (interval velocities, N x dim y), a Solution of the same problem on
-        any grid or scheme (interpolated onto this one), or an array of interval velocities.
+        any grid or scheme (interpolated onto this one; from another grid of this scheme, with
+        IPOPT, with its multipliers carried over as in continuation), or an array of interval
+        velocities.
         ``warm``: a Solution of this compiled problem (same N and structure) to start from,
         primal and dual (IPOPT's warm start), for re-solves with new parameters or boundary
         values; one start, no continuation.
@@ -309,14 +311,18 @@ class CompiledProblem:
                    multistart: bool | int) -> list[Guess]:
         """The starts of one grid: the last solved grid's solution interpolated onto it (with
         its multipliers where they carry over, :func:`~ocgroupoid.solve.multipliers.onto`),
-        else the guess given, else the geodesic (and with ``multistart`` every) guess."""
+        else the guess given (a Solution of another grid: with its multipliers too, where
+        they carry over), else the geodesic (and with ``multistart`` every) guess."""
         if source is not None:
             return [onto(source[0], source[1], tr, p)]
         if given is not None:
             if isinstance(given, Guess) and given.primal is not None and \
                     given.x is not None and given.x.size != tr.nx:  # a rescue's scheme
                 given = given.primal
-            return [as_guess(given, tr, p)]
+            start = as_guess(given, tr, p)
+            if isinstance(given, Solution) and given.rows is not None and start.x is None:
+                start = with_multipliers(given.rows, given, tr, p, start)  # another grid's
+            return [start]
         return self.guesses(tr, p, multistart)
 
     def _rescue(self, tr: Transcription, p: np.ndarray, via: Transcription, pv: np.ndarray,

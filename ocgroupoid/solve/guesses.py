@@ -88,7 +88,8 @@ def as_guess(guess: Any, tr: Transcription, p: np.ndarray) -> Guess:
     * a :class:`Guess` (interval velocities N x dim y, or a whole NLP point ``x``);
     * a :class:`Solution` of the same problem on any N or scheme: its velocities interpolated
       linearly in time onto this grid's interval midpoints (its own point as is when the
-      NLP is the same);
+      NLP is the same; :meth:`CompiledProblem.solve` adds its multipliers where they carry
+      over, :func:`~ocgroupoid.solve.multipliers.with_multipliers`);
     * an array of interval velocities, N x dim y.
     """
     dg = tr.problem.groupoid.algebra_dim

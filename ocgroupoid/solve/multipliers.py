@@ -1,5 +1,6 @@
 """A coarse grid's multipliers carried onto a finer grid: with the interpolated point, IPOPT's
-primal-dual warm start of the finer grid (continuation, accuracy on demand).
+primal-dual warm start of the finer grid (continuation, accuracy on demand, and a Solution
+given as the guess of another grid, which keeps its NLP's rows: :mod:`~ocgroupoid.solve.rows`).
 
 The coarse solution's velocities interpolated onto the finer grid (:func:`interpolate`) start
 the finer grid near its solution, but IPOPT started there from its own initial barrier
@@ -35,9 +36,10 @@ from typing import Protocol
 
 import numpy as np
 
-from ..nlp.assembly import Block, Kind
+from ..nlp.assembly import Kind
 from ..nlp.transcription import Guess, Transcription
 from .guesses import interpolate
+from .rows import Rows, times
 
 #: the kinds of constraint blocks whose multipliers are carried; a block of another kind (the
 #: mesh of adaptive steps) leaves the finer grid without multipliers
@@ -54,54 +56,56 @@ class Solved(Protocol):
     lam_x: np.ndarray
 
 
-def _times(block: Block, columns: int, N: int) -> np.ndarray | None:
-    """The times of a block's columns as fractions of T: its own, or the interval midpoints
-    of a block with one column per interval (the reconstruction); None when neither."""
-    times = np.asarray(block.times, dtype=float)
-    if times.size == columns:
-        return times
-    if columns == N:
-        return (np.arange(N) + 0.5) / N
-    return None
-
-
-def carried(coarse: Transcription, lam_g: np.ndarray, lam_x: np.ndarray,
-            fine: Transcription) -> tuple[np.ndarray, np.ndarray] | None:
+def carried(coarse: Rows | Transcription, lam_g: np.ndarray, lam_x: np.ndarray,
+            fine: Rows | Transcription) -> tuple[np.ndarray, np.ndarray] | None:
     """The coarse grid's multipliers ``lam_g``, ``lam_x`` on the fine grid (module
     docstring): each row of a block interpolated linearly in time, point by point (a block
     of one column copied), a bound's scaled by the ratio of the steps, coarse N / fine N;
     the variables' own bounds copied (the stage variables have none). None where the grids'
-    blocks do not correspond (another scheme, retraction or rule, adaptive steps): the fine
-    grid then starts without them."""
-    a, b = coarse.disc, fine.disc
-    if (a.scheme, a.retraction, a.rule) != (b.scheme, b.retraction, b.rule) \
-            or coarse.layout.phases or fine.layout.phases \
-            or len(coarse.blocks) != len(fine.blocks) \
-            or coarse.nx - coarse.layout.stage.size != fine.nx - fine.layout.stage.size:
+    blocks do not correspond (another scheme, retraction or rule, adaptive steps, other
+    sizes): the fine grid then starts without them."""
+    a = coarse if isinstance(coarse, Rows) else Rows.of(coarse)
+    b = fine if isinstance(fine, Rows) else Rows.of(fine)
+    if a.method != b.method or a.phased or b.phased or len(a.blocks) != len(b.blocks) \
+            or a.nx - a.stage != b.nx - b.stage or lam_g.size != a.ng or lam_x.size != a.nx:
         return None
-    out = np.zeros(fine.ng)
-    for bc, bf in zip(coarse.blocks, fine.blocks):
+    out = np.zeros(b.ng)
+    for bc, bf in zip(a.blocks, b.blocks):
         rc, rf = bc.g_rows, bf.g_rows
         if bc.name != bf.name or bc.kind is not bf.kind or bc.kind not in CARRIED \
                 or rc.shape[0] != rf.shape[0]:
             return None
         if rc.size == 0:
             continue
-        scale = coarse.N / fine.N if bc.kind is Kind.INEQUALITY else 1.0
+        scale = a.N / b.N if bc.kind is Kind.INEQUALITY else 1.0
         values = lam_g[rc]
         if rc.shape[1] == 1 and rf.shape[1] == 1:
             out[rf] = scale * values
             continue
-        tc, tf = _times(bc, rc.shape[1], coarse.N), _times(bf, rf.shape[1], fine.N)
+        tc, tf = times(bc, a.N), times(bf, b.N)
         if tc is None or tf is None or bc.points != bf.points:
             return None
         k = bc.points  # the points of a column apart: an interval's end and the next's
         for j in range(k):  # start share a time, on either side of a switch
             out[rf[:, j::k]] = scale * np.array([np.interp(tf[j::k], tc[j::k], row)
                                                  for row in values[:, j::k]])
-    x_lam = np.zeros(fine.nx)
-    x_lam[fine.layout.stage.size:] = lam_x[coarse.layout.stage.size:]
+    x_lam = np.zeros(b.nx)
+    x_lam[b.stage:] = lam_x[a.stage:]
     return out, x_lam
+
+
+def with_multipliers(coarse: Rows | Transcription, solved: Solved, fine: Transcription,
+                     p: np.ndarray, primal: Guess) -> Guess:
+    """``primal`` (the coarse solution's velocities on the fine grid) and, where the fine
+    grid is solved by IPOPT and the multipliers carry over (:func:`carried`), the whole
+    point with them: IPOPT's primal-dual warm start, which falls back to ``primal`` (its
+    ``Guess.primal``) if it fails."""
+    duals = carried(coarse, solved.lam_g, solved.lam_x, fine) if fine.fatrop is None else None
+    if duals is None:
+        return primal
+    x0, _ = fine.start_point(primal, p)
+    return Guess(f"{primal.label}, with its multipliers", primal.xi, np.asarray(x0, dtype=float),
+                 duals[0], duals[1], T=primal.T, primal=primal)
 
 
 def onto(coarse: Transcription, solved: Solved, fine: Transcription, p: np.ndarray) -> Guess:
@@ -109,10 +113,5 @@ def onto(coarse: Transcription, solved: Solved, fine: Transcription, p: np.ndarr
     (:func:`interpolate`) and, where the fine grid is solved by IPOPT and the multipliers
     carry over (:func:`carried`), the whole point with them: IPOPT's primal-dual warm start,
     which falls back to the interpolated velocities alone (``Guess.primal``) if it fails."""
-    primal = interpolate(coarse, solved.x, solved.p, fine.N)
-    duals = carried(coarse, solved.lam_g, solved.lam_x, fine) if fine.fatrop is None else None
-    if duals is None:
-        return primal
-    x0, _ = fine.start_point(primal, p)
-    return Guess(f"{primal.label}, with its multipliers", primal.xi, np.asarray(x0, dtype=float),
-                 duals[0], duals[1], T=primal.T, primal=primal)
+    return with_multipliers(coarse, solved, fine, p,
+                            interpolate(coarse, solved.x, solved.p, fine.N))

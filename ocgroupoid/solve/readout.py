@@ -22,6 +22,7 @@ from ..nlp.transcription import RawResult, Transcription
 from ..verify.diagnostics import diagnose
 from ..verify.verdict import REPLAY_TOLERANCE, check_tolerance, scales, tolerances, verdict
 from .hints import hint_for
+from .rows import Rows
 from .solution import Solution
 
 
@@ -80,7 +81,7 @@ def make_solution(tr: Transcription, r: RawResult, minima: Sequence[Any],
         minima=[m.__dict__ for m in minima], hint=hint, x=r.x, p=r.p, lam_g=r.lam_g,
         lam_x=r.lam_x,
         control_ppoly=ppoly, manifolds={f.state: f.manifold for f in G.factors},
-        labels=labels_at(tr, P),
+        labels=labels_at(tr, P), rows=Rows.of(tr),
     )
 
 

@@ -20,6 +20,7 @@ import numpy as np
 
 from ..errors import SolverError
 from .outputs import write_atomic  # noqa: F401  (re-exported: callers import it from here)
+from .rows import Rows
 
 
 def _jsonable(v: Any) -> Any:
@@ -92,6 +93,10 @@ class Solution:
     #: the solver of the best start (``ipopt``, ``fatrop``, ``ipopt after fatrop``, ``ipopt
     #: polish after fatrop``: IPOPT from fatrop's acceptable point)
     backend: str = "ipopt"
+    #: the constraint rows of the NLP it was solved on, so that ``solve(guess=solution)`` on
+    #: another grid carries its multipliers over (:mod:`~ocgroupoid.solve.multipliers`);
+    #: None when read from a file
+    rows: Rows | None = field(default=None, repr=False, compare=False)
 
     def __repr__(self) -> str:
         return (f"Solution({self.problem!r}, status={self.status!r}, cost={self.cost:.10g}, "
