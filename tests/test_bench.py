@@ -302,9 +302,10 @@ def test_a_coarse_method_has_rows_where_it_has_a_coarse_grid(tmp_path: Path) -> 
 
 def test_a_coarse_method_solves_a_quarter_of_the_grid_first() -> None:
     """``+coarse``: the solve of a row on N is a solve on N/4 from the row's start and one on
-    N from that solution, interpolated (``solver.continuation: [N/4]`` of the compiled
-    problem); the coarse run is listed first, the time counts both, and it lands where the
-    cold solve lands. Below a coarse grid of 8 the method solves cold."""
+    N from that solution, interpolated, with IPOPT's multipliers carried over
+    (``solver.continuation: [N/4]`` of the compiled problem); the coarse run is listed
+    first, the time counts both, and it lands where the cold solve lands. Below a coarse
+    grid of 8 the method solves cold."""
     from ocgroupoid.bench.methods import Method, parse_methods
     from ocgroupoid.bench.timing import Setting, timed_solve
     (method,) = parse_methods("order4@fatrop+jit+coarse", ())
@@ -321,6 +322,8 @@ def test_a_coarse_method_solves_a_quarter_of_the_grid_first() -> None:
     runs = coarse.solution.diagnostics["runs"]
     assert [r["backend"] for r in runs] == ["ipopt on N=8", "ipopt"]
     assert all(r["status"] == "Solve_Succeeded" for r in runs)
+    assert coarse.solution.discretization["start"] == \
+        "interpolated from N=8, with its multipliers"  # as continuation carries them
     assert runs[1]["iterations"] < cold.solution.iterations  # it starts near the solution
     assert coarse.solution.cost == pytest.approx(cold.solution.cost, rel=1e-8)
     assert coarse.solution.success and coarse.solution.solve_seconds > 0

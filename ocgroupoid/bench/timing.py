@@ -5,8 +5,11 @@ the same guess (a geodesic, or the multi-start guess labelled ``start`` that fou
 reference's minimum) without an iteration callback, more often when it is fast (until the
 runs add up to :data:`MIN_SECONDS`, at most :data:`MAX_REPEATS`), and the median of its wall
 times is the row's time. A ``+coarse`` method's solve is two (:meth:`Method.coarse_N`): from
-the start on the coarse grid, then on N from that solution interpolated (from the start
-when the coarse grid failed), and its time is both's. The solves run back to back
+the start on the coarse grid, then on N from that solution interpolated, with IPOPT its
+multipliers carried over as a solve of the compiled problem carries them
+(:func:`~ocgroupoid.solve.multipliers.onto`, again from the interpolated velocities alone
+if that start fails; from the start when the coarse grid failed), and its time is all of
+theirs. The solves run back to back
 (:func:`timed_solve`) or in rounds with other methods and grids (:func:`interleaved`, what
 the work-precision benchmark does).
 A run's time is what the caller of the built NLP waits for
@@ -35,11 +38,12 @@ import numpy as np
 from ..errors import OcgError
 from ..files.schema import ProblemFile
 from ..model.problem import Problem
+from ..nlp.backends.base import Attempt
 from ..nlp.method import DEFAULT_STEPS
 from ..nlp.options import MAX_SECONDS
 from ..nlp.transcription import Guess, RawResult, Transcription
 from ..solve import CompiledProblem, Solution, compile_problem, distinct_minima, make_solution
-from ..solve.guesses import interpolate
+from ..solve.multipliers import onto
 from .methods import Method
 
 MIN_SECONDS = 0.25  # a solve faster than this is repeated until the repeats add up to it,
@@ -151,11 +155,16 @@ class Trial:
         tr, p, guess = self.coarse
         deadline = time.monotonic() + self.tr.max_seconds  # both runs' time
         first = tr.solve(guess, p, deadline=deadline)
-        start = interpolate(tr, first.x, first.p, self.tr.N) if first.success else self.guess
+        start = onto(tr, first, self.tr, self.p) if first.success else self.guess
         r = self.tr.solve(start, self.p, deadline=deadline)
-        return replace(r, solve_seconds=first.solve_seconds + r.solve_seconds,
-                       earlier=((f"{first.backend} on N={tr.N}", first.status,
-                                 first.iterations), *r.earlier))
+        earlier: tuple[Attempt, ...] = ((f"{first.backend} on N={tr.N}", first.status,
+                                         first.iterations),)
+        seconds = first.solve_seconds + r.solve_seconds
+        if not r.success and start.primal is not None:  # the carried warm start failed
+            earlier += ((f"{r.backend} with the multipliers", r.status, r.iterations),)
+            r = self.tr.solve(start.primal, self.p, deadline=deadline)
+            seconds += r.solve_seconds
+        return replace(r, solve_seconds=seconds, earlier=(*earlier, *r.earlier))
 
     def timed(self) -> Timed:
         """The last solve read out and diagnosed, with the times of all (after a run);
