@@ -17,6 +17,7 @@ from ocgroupoid import files
 from ocgroupoid.nlp.assembly import Kind
 from ocgroupoid.nlp.transcription import RawResult, Transcription
 from ocgroupoid.solve.multipliers import carried, onto
+from ocgroupoid.solve.rows import Rows
 
 QMT = Path(__file__).resolve().parent.parent / "problems" / "quadrotor_min_time.yaml"
 
@@ -43,7 +44,7 @@ def errors(solved: dict[int, tuple[Transcription, og.Solution]], N: int,
     """Per block of the grid 2N: |carried from N - its own| / |its own|, the bounds' carried
     multipliers times ``bound_scale``."""
     (tc, sc), (tf, sf) = solved[N], solved[2 * N]
-    duals = carried(tc, sc.lam_g, sc.lam_x, tf)
+    duals = carried(Rows.of(tc), sc.lam_g, sc.lam_x, Rows.of(tf))
     assert duals is not None
     lam_g, lam_x = duals
     assert lam_g.shape == sf.lam_g.shape and lam_x.shape == sf.lam_x.shape
@@ -122,7 +123,7 @@ def test_carried_multipliers_start_ipopt_with_larger_bound_pushes(solved) -> Non
 def test_multipliers_carry_between_grids_of_one_scheme_to_ipopt_only(solved) -> None:
     tc, sc = solved[16]
     order2 = compiled(32, "discretization.scheme=order2").transcription
-    assert carried(tc, sc.lam_g, sc.lam_x, order2) is None
+    assert carried(Rows.of(tc), sc.lam_g, sc.lam_x, Rows.of(order2)) is None
     p = solved[32][0].pack()
     warm = onto(tc, sc, solved[32][0], p)
     assert warm.x is not None and warm.lam_g is not None and warm.primal is not None
@@ -165,7 +166,7 @@ def test_a_solution_given_as_the_guess_of_another_grid_brings_its_multipliers(so
     assert warm.iterations < cold.iterations, (warm.iterations, cold.iterations)
     again = pickle.loads(pickle.dumps(sc))  # a sweep's worker sends its solutions back
     assert again.rows is not None and carried(again.rows, again.lam_g, again.lam_x,
-                                              solved[32][0]) is not None
+                                              Rows.of(solved[32][0])) is not None
 
 
 def test_a_failed_warm_start_is_solved_again_without_the_multipliers(monkeypatch) -> None:

@@ -56,16 +56,14 @@ class Solved(Protocol):
     lam_x: np.ndarray
 
 
-def carried(coarse: Rows | Transcription, lam_g: np.ndarray, lam_x: np.ndarray,
-            fine: Rows | Transcription) -> tuple[np.ndarray, np.ndarray] | None:
-    """The coarse grid's multipliers ``lam_g``, ``lam_x`` on the fine grid (module
+def carried(a: Rows, lam_g: np.ndarray, lam_x: np.ndarray,
+            b: Rows) -> tuple[np.ndarray, np.ndarray] | None:
+    """The coarse grid ``a``'s multipliers ``lam_g``, ``lam_x`` on the fine grid ``b`` (module
     docstring): each row of a block interpolated linearly in time, point by point (a block
     of one column copied), a bound's scaled by the ratio of the steps, coarse N / fine N;
     the variables' own bounds copied (the stage variables have none). None where the grids'
     blocks do not correspond (another scheme, retraction or rule, adaptive steps, other
     sizes): the fine grid then starts without them."""
-    a = coarse if isinstance(coarse, Rows) else Rows.of(coarse)
-    b = fine if isinstance(fine, Rows) else Rows.of(fine)
     if a.method != b.method or a.phased or b.phased or len(a.blocks) != len(b.blocks) \
             or a.nx - a.stage != b.nx - b.stage or lam_g.size != a.ng or lam_x.size != a.nx:
         return None
@@ -94,13 +92,14 @@ def carried(coarse: Rows | Transcription, lam_g: np.ndarray, lam_x: np.ndarray,
     return out, x_lam
 
 
-def with_multipliers(coarse: Rows | Transcription, solved: Solved, fine: Transcription,
-                     p: np.ndarray, primal: Guess) -> Guess:
+def with_multipliers(coarse: Rows, solved: Solved, fine: Transcription, p: np.ndarray,
+                     primal: Guess) -> Guess:
     """``primal`` (the coarse solution's velocities on the fine grid) and, where the fine
     grid is solved by IPOPT and the multipliers carry over (:func:`carried`), the whole
     point with them: IPOPT's primal-dual warm start, which falls back to ``primal`` (its
     ``Guess.primal``) if it fails."""
-    duals = carried(coarse, solved.lam_g, solved.lam_x, fine) if fine.fatrop is None else None
+    duals = carried(coarse, solved.lam_g, solved.lam_x, Rows.of(fine)) \
+        if fine.fatrop is None else None
     if duals is None:
         return primal
     x0, _ = fine.start_point(primal, p)
@@ -113,5 +112,5 @@ def onto(coarse: Transcription, solved: Solved, fine: Transcription, p: np.ndarr
     (:func:`interpolate`) and, where the fine grid is solved by IPOPT and the multipliers
     carry over (:func:`carried`), the whole point with them: IPOPT's primal-dual warm start,
     which falls back to the interpolated velocities alone (``Guess.primal``) if it fails."""
-    return with_multipliers(coarse, solved, fine, p,
+    return with_multipliers(Rows.of(coarse), solved, fine, p,
                             interpolate(coarse, solved.x, solved.p, fine.N))
