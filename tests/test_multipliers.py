@@ -169,6 +169,15 @@ def test_a_solution_given_as_the_guess_of_another_grid_brings_its_multipliers(so
                                               Rows.of(solved[32][0])) is not None
 
 
+def test_a_solution_of_another_problem_as_the_guess_is_a_clear_error(solved) -> None:
+    """The quadrotor's solution has no cart-pole velocities: one line that says so, no
+    KeyError."""
+    cfg = files.load(QMT.parent / "cart_pole.yaml", ["horizon.N=16", "solver.backend=ipopt"])
+    cart_pole = og.compile_problem(files.build(cfg), files.method(cfg), files.options(cfg))
+    with pytest.raises(og.ConfigError, match=r"has no velocities \['dx', 'dtheta'\]"):
+        cart_pole.solve(multistart=False, guess=solved[16][1])
+
+
 def test_a_failed_warm_start_is_solved_again_without_the_multipliers(monkeypatch) -> None:
     """The warm start is made to fail: the grid is solved again from the interpolated
     velocities alone, to the minimum, and the note says so."""

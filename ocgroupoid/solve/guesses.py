@@ -98,8 +98,14 @@ def as_guess(guess: Any, tr: Transcription, p: np.ndarray) -> Guess:
                 guess.discretization.get("scheme") == tr.disc.scheme:
             return Guess(f"solution ({guess.discretization.get('scheme')}, N={guess.N})",
                          np.zeros((0, 0)), guess.x)
-        V = np.hstack([guess.velocities[f.velocity] for f in tr.problem.groupoid.factors]) \
-            if guess.velocities else np.zeros((0, dg))
+        names = [f.velocity for f in tr.problem.groupoid.factors]
+        missing = [n for n in names if n not in guess.velocities]
+        if guess.velocities and missing:
+            raise ConfigError(f"guess: the solution of {guess.problem!r} has no velocities "
+                              f"{missing} (it has {list(guess.velocities)}): pass a solution "
+                              "of the same problem")
+        V = np.hstack([guess.velocities[n] for n in names]) if guess.velocities \
+            else np.zeros((0, dg))
         t = np.asarray(guess.velocity_t, dtype=float)
         if V.shape[1] != dg or t.size != V.shape[0] or t.size < 1:
             raise ConfigError(f"guess: the solution of {guess.problem!r} has velocities of "
