@@ -158,10 +158,10 @@ def test_a_reused_solver_reads_each_solves_bounds() -> None:
              tuple(tightened(a[k], 0.8) for k in ("lbg", "ubg", "lbx", "ubx")),
              (fixed_lb, fixed_ub, a["lbx"], a["ubx"])]
     reused = [fb.direct.solve(a["x0"], a["p"], *bounds) for bounds in cases]
-    for bounds, (out, iterations, flag, value) in zip(cases, reused):
+    for bounds, (out, iterations, flag, value, stopped) in zip(cases, reused):
         fresh = FatropOcp(fb.form, fb.options["cache"], fb.direct.library,
                           fb.options["fatrop"]).solve(a["x0"], a["p"], *bounds)
-        assert (iterations, flag, value) == fresh[1:]
+        assert (iterations, flag, value, stopped) == fresh[1:]
         for key in out:
             np.testing.assert_array_equal(out[key], fresh[0][key])
     assert reused[1][0]["f"] != reused[0][0]["f"]  # the tightened bounds bind

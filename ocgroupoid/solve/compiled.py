@@ -22,7 +22,7 @@ import numpy as np
 from ..errors import ConfigError
 from ..model.problem import Problem
 from ..nlp import mesh
-from ..nlp.backends import INTERRUPTED, TIMED_OUT, Run, Start
+from ..nlp.backends import INTERRUPTED, LISTENER_STOP, TIMED_OUT, Run, Start
 from ..nlp.backends.policy import Rescue
 from ..nlp.method import Discretization, Method
 from ..nlp.options import SolverOptions
@@ -548,7 +548,7 @@ def _rescuable(level: list[RawResult]) -> bool:
     the first of itself (not stopped by the time or an interrupt; the further starts may
     have been stopped by their budget)."""
     return not any(r.success for r in level) and \
-        level[0].status not in (TIMED_OUT, INTERRUPTED, "User_Requested_Stop")
+        level[0].status not in (TIMED_OUT, INTERRUPTED, LISTENER_STOP)
 
 
 def _whole_point(guess: Any) -> bool:

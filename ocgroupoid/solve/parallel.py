@@ -13,8 +13,8 @@ its iterations it reads what the workers sent, so their progress reaches the cal
 happens. On two cores this forks one process, not two, and the first start runs where
 nothing has to be copied: so3's six starts at N = 64 (about 30 ms each), timed one by one,
 ran in 0.59 of their time in turn at the first multi-start of a process and 0.50 at the next
-ones; ``scripts/bench_multistart.py`` gives 0.51-0.68 on the problem files (measured
-2026-12-04).
+ones; ``scripts/bench_multistart.py`` gives medians of 0.52-0.58 on the problem files, and
+0.57-0.81 for a process's first parallel solve (measured 2026-12-04, late).
 
 **How the solver gets into a worker.** The workers are forked from the solving process at
 the first multi-start of a transcription, so each holds the compiled
@@ -58,13 +58,13 @@ criterion that stopped starts early could drop the best minimum, so there is non
 budget is the only limit, as in turn.
 
 **Ctrl-C, the deadline and failures.** The workers ignore SIGINT; the solving process, which
-catches it (:mod:`~ocgroupoid.solve.interrupt`), or its deadline sets a stop event that every
-worker's iteration callback (and fatrop's ``stop()``) reads: the running starts end at their
-next iteration and come back, the starts not handed out are skipped, as in turn. A start that
-raises in a forked worker, or whose worker dies, is reported as a failed start (status
-:data:`WORKER_FAILED`, the error in the report) and the others go on (a worker that died
-takes no more, the others and the solving process take them); a start that raises in the
-solving process raises, as in turn.
+catches it (:mod:`~ocgroupoid.solve.interrupt`), or its deadline sets a stop event that
+every worker's iteration callback (IPOPT's, fatrop's) and fatrop's ``stop()`` read: the
+running starts end at their next iteration and come back, the starts not handed out are
+skipped, as in turn. A start that raises in a forked worker, or whose worker dies, is
+reported as a failed start (status :data:`WORKER_FAILED`, the error in the report) and the
+others go on (a worker that died takes no more, the others and the solving process take
+them); a start that raises in the solving process raises, as in turn.
 """
 
 from __future__ import annotations
@@ -82,7 +82,7 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from ..nlp.backends import INTERRUPTED, TIMED_OUT, IpoptBackend
+from ..nlp.backends import INTERRUPTED, LISTENER_STOP, TIMED_OUT, IpoptBackend
 from ..nlp.backends.policy import Rescue
 from ..nlp.program import Guess
 from ..nlp.transcription import RawResult, Transcription
@@ -149,7 +149,7 @@ def budgeted(r: RawResult, deadline: float, stopped: bool) -> RawResult:
     """A further start's ``r``, its status :data:`BUDGET_SPENT` when its run was stopped (by
     IPOPT's listener or fatrop's ``stop()``) and neither by the deadline nor, ``stopped``, by
     Ctrl-C or the stop event: then its budget stopped it."""
-    if not r.success and r.status in ("User_Requested_Stop", INTERRUPTED) and not stopped \
+    if not r.success and r.status in (LISTENER_STOP, INTERRUPTED) and not stopped \
             and time.monotonic() <= deadline:
         return replace(r, status=BUDGET_SPENT)
     return r
@@ -157,7 +157,7 @@ def budgeted(r: RawResult, deadline: float, stopped: bool) -> RawResult:
 
 def timed(r: RawResult, deadline: float) -> RawResult:
     """``r``, its status ``TIMED_OUT`` when its listener stopped it past the deadline."""
-    if r.status == "User_Requested_Stop" and time.monotonic() > deadline:
+    if r.status == LISTENER_STOP and time.monotonic() > deadline:
         return replace(r, status=TIMED_OUT)
     return r
 
@@ -254,9 +254,9 @@ class _Batch:
 
 
 def _over(shared: _Shared, began: float, waited: list[float]) -> Callable[[], bool]:
-    """Whether a further start's fatrop run in a worker (which has no iteration callback)
-    should stop, asked by its guard or its helper: the stop event, or the seconds of its
-    budget spent (the seconds it waited at the smallest budget not counted)."""
+    """Whether a further start's fatrop run in a worker should stop, asked by its guard or
+    its helper (where fatrop hears no listener): the stop event, or the seconds of its budget
+    spent (the seconds it waited at the smallest budget not counted)."""
     def over() -> bool:
         if shared.stop.is_set():
             return True
@@ -314,9 +314,10 @@ def watch(where: str, progress: Callable[[str], None], interrupt: Interrupt,
     """A start solved in the solving process: IPOPT's iteration callback, which reports
     (iteration, objective, infeasibility) to ``progress`` at most every ``every`` seconds and
     stops once Ctrl-C was pressed, past ``deadline`` (``time.monotonic()``) or once ``budget``
-    (iterations or seconds from now) is spent; and fatrop's ``stop()`` (it has no iteration
-    callback), asked by its guard or its helper: Ctrl-C, or the budget's seconds. Both call
-    ``look()`` first, which reads what the workers sent meanwhile."""
+    (iterations or seconds from now) is spent (fatrop hears it too, through its own interface:
+    :meth:`~ocgroupoid.nlp.backends.fatrop_ocp.FatropOcp.solve`); and fatrop's ``stop()``,
+    asked by its guard or its helper (which hears no listener): Ctrl-C, or the budget's
+    seconds. Both call ``look()`` first, which reads what the workers sent meanwhile."""
     last = [time.perf_counter()]
     began = last[0]
 

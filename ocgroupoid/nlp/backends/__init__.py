@@ -4,7 +4,7 @@ whole sparse KKT system, fatrop on the stage form, and the policy that runs them
 from __future__ import annotations
 
 from ..options import SolverOptions
-from .base import INTERRUPTED, TIMED_OUT, Backend, Graph, Run, Start
+from .base import INTERRUPTED, LISTENER_STOP, TIMED_OUT, Backend, Graph, Run, Start
 from .fatrop import FatropBackend
 from .ipopt import DEFAULT_IPOPT, IpoptBackend, evaluated, ipopt_options
 from .policy import in_turn
@@ -31,4 +31,4 @@ def build(nlp: Graph, options: SolverOptions) -> list[Backend]:
 
 __all__ = ["Backend", "Graph", "Run", "Start", "IpoptBackend", "FatropBackend", "build",
            "compiled_together", "in_turn", "ipopt_options", "DEFAULT_IPOPT", "TIMED_OUT",
-           "INTERRUPTED"]
+           "LISTENER_STOP", "INTERRUPTED"]

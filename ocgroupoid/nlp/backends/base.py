@@ -11,9 +11,9 @@ The exported C solver is each backend's own: IPOPT's the same solve as a CasADi 
 (``IpoptBackend.graph``), which CasADi's code generator writes; fatrop's its driver on the
 stage form's Functions (``FatropBackend.exported``, :mod:`ocgroupoid.export.fatrop`).
 
-What a backend cannot do it ignores (fatrop has no dual warm start and no iteration
-callback). Which backends run, and in what order, is the solve's policy
-(:mod:`~ocgroupoid.nlp.backends.policy`), not the NLP's.
+What a backend cannot do it ignores (fatrop has no dual warm start, and hears its
+listener only through its own C interface in this process). Which backends run, and in what
+order, is the solve's policy (:mod:`~ocgroupoid.nlp.backends.policy`), not the NLP's.
 """
 
 from __future__ import annotations
@@ -32,6 +32,8 @@ from ..watch import Listener
 #: what a solve reports that was stopped at its deadline (IPOPT's name for it) or by Ctrl-C
 TIMED_OUT = "Maximum_WallTime_Exceeded"
 INTERRUPTED = "interrupted"
+#: what a run reports that its listener stopped (IPOPT's name; fatrop's too, where it has one)
+LISTENER_STOP = "User_Requested_Stop"
 #: what a run reports that stopped near a solution, its error below the acceptable level for
 #: many iterations but not below the tolerance (IPOPT's name; not a success)
 ACCEPTABLE = "Solved_To_Acceptable_Level"

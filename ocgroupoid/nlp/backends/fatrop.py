@@ -19,15 +19,16 @@ over its own (:data:`DEFAULT_FATROP`: no watchdog, more second-order corrections
 scaling of its own: it is given the NLP scaled as IPOPT scales it (:func:`row_scales`,
 :func:`_scales`), its rows and cost multiplied by factors computed at the start and passed
 as parameters, and its solution is mapped back (:meth:`FatropBackend.unscaled`). It has no
-dual warm start (a warm start gives it the primal point) and no iteration callback, no time
-limit, and it loops without bound on some singular KKT systems. Every solve is therefore
-guarded: it is left at its deadline, after repeated NaN evaluations, on Ctrl-C, or once it
-runs longer than its iterations can take (:data:`STUCK_SECONDS`). Through the own interface
-on Linux the guard is the driver's (``fatrop_guard.c``: a jump back out of fatrop, from its
-callbacks or from a timer signal), and the solve runs in this process; elsewhere it runs in
-a helper process (:mod:`~ocgroupoid.nlp.isolated`), which is killed. The helper's way there
-and back was about half of a small solve (so3 at N = 4: 1.33 ms against 0.65 ms in this
-process).
+dual warm start (a warm start gives it the primal point), no iteration callback (the driver
+makes one: it asks the listener at each iteration's Hessian and stops fatrop by lowering its
+``max_iter``), no time limit, and it loops without bound on some singular KKT systems. Every
+solve is therefore guarded: it is left at its deadline, after repeated NaN evaluations, on
+Ctrl-C, or once it runs longer than its iterations can take (:data:`STUCK_SECONDS`). Through
+the own interface on Linux the guard is the driver's (``fatrop_guard.c``: a jump back out of
+fatrop, from its callbacks or from a timer signal), and the solve runs in this process;
+elsewhere it runs in a helper process (:mod:`~ocgroupoid.nlp.isolated`), which is killed.
+The helper's way there and back was about half of a small solve (so3 at N = 4: 1.33 ms
+against 0.65 ms in this process).
 """
 
 from __future__ import annotations
@@ -48,7 +49,8 @@ from ..isolated import Isolated, Stopped
 from ..jit import compiled
 from ..options import SolverOptions
 from ..stageform import NotStaged, StageForm, stage_form
-from .base import ACCEPTABLE, INTERRUPTED, TIMED_OUT, Backend, Graph, Run, Start
+from ..watch import Listener
+from .base import ACCEPTABLE, INTERRUPTED, LISTENER_STOP, TIMED_OUT, Backend, Graph, Run, Start
 from .fatrop_ocp import BlockMaps, FatropOcp, Guard, Unavailable, block_maps, option_kinds
 from .ipopt import ipopt_options
 
@@ -392,8 +394,9 @@ class FatropBackend(Backend):
                 "lam_g": sf.rows_x(s * r["lam_g"] / s_f), "lam_x": sf.x_of(r["lam_x"] / s_f)}
 
     def run(self, start: Start) -> Run:
-        """Run fatrop from the primal point of ``start`` (its multipliers and listener are
-        not for fatrop), guarded in this process (:attr:`guarded`) or else in the helper
+        """Run fatrop from the primal point of ``start`` (its multipliers are not for fatrop;
+        its listener hears fatrop's iterations where fatrop runs guarded in this process),
+        guarded in this process (:attr:`guarded`) or else in the helper
         process, until its deadline (status :data:`TIMED_OUT`), stopped after repeated NaN
         evaluations or past :attr:`stuck_after` (:data:`FAILED`, with a note) or once
         ``start.stop()`` is true or on Ctrl-C (:data:`INTERRUPTED`). Its seconds are the
@@ -407,7 +410,7 @@ class FatropBackend(Backend):
         if self.guarded:
             try:
                 answer = self._solve_here((x0, p), Guard(limit, start.stop, isolated.NAN_LIMIT,
-                                                          isolated.POLL))
+                                                          isolated.POLL), start.listener)
             except Unavailable:
                 self.guarded = False
         if answer is None:
@@ -428,22 +431,33 @@ class FatropBackend(Backend):
                                 0, time.perf_counter() - t0, note)
         return replace(answer, seconds=time.perf_counter() - t0)
 
-    def _solve_here(self, request: tuple[np.ndarray, np.ndarray], guard: Guard | None = None
-                    ) -> Run | Stopped:
+    def _solve_here(self, request: tuple[np.ndarray, np.ndarray], guard: Guard | None = None,
+                    listener: Listener | None = None) -> Run | Stopped:
         """The solve itself, in this process: guarded by ``guard`` (:attr:`guarded`), or run
-        by the helper process (:meth:`run` times it as the caller waits for it)."""
+        by the helper process (:meth:`run` times it as the caller waits for it). With its own
+        interface, ``listener`` hears each iteration (the objective unscaled) and may stop it
+        (status :data:`~ocgroupoid.nlp.backends.base.LISTENER_STOP`, after the iteration
+        under way: :meth:`~.fatrop_ocp.FatropOcp.solve`)."""
         x0, p = request
         if self.direct is not None:
             a = self.arguments(x0, p)
+            heard = None
+            if listener is not None:
+                s_f, listen = float(np.asarray(a["p"]).ravel()[-1]), listener
+
+                def heard(k: int, objective: float, infeasibility: float) -> bool:
+                    return listen(k, objective / s_f, infeasibility)
+
             solved = self.direct.solve(a["x0"], a["p"], a["lbg"], a["ubg"], a["lbx"], a["ubx"],
-                                       guard)
+                                       guard, heard)
             self.nans = self.direct.nans
             if isinstance(solved, Stopped):
                 return solved
-            r, iterations, flag, value = solved
+            r, iterations, flag, value, stopped = solved
             u = self.unscaled(r, a["p"])
-            return Run(u["x"], float(u["f"][0]), u["lam_g"], u["lam_x"],
-                       STATUS.get(flag, FAILED), value == 0, iterations, 0.0)
+            status = LISTENER_STOP if stopped and flag == 1 else STATUS.get(flag, FAILED)
+            return Run(u["x"], float(u["f"][0]), u["lam_g"], u["lam_x"], status, value == 0,
+                       iterations, 0.0)
         r = self._whole(x0=x0, p=p)
         stats = self._whole.stats()
         success, iterations = bool(stats["success"]), int(stats["iter_count"])

@@ -50,6 +50,11 @@ struct ocg_data {
   ocg_cint *iw;
   double *w;
   struct ocg_guard *guard;       /* this solve's guard, or NULL: unguarded */
+  struct FatropOcpCSolver *solver; /* this solve's (for a stop asked by s->iteration) */
+  /* for s->iteration: the infeasibility at xg, the point of the last Jacobian (fatrop's
+   * at each iterate; has_g: one since the solve began), reused at the iterate */
+  double *xg, infeasibility_at;
+  int has_g;
   struct FatropOcpCInterface ocp;
 };
 
@@ -127,6 +132,33 @@ static void ocg_write_primal(const struct ocg_problem *p, const double *z, doubl
   }
 }
 
+/* the largest violation of a row's or a variable's bounds at d->x, its rows in d->g (the
+ * scaled rows fatrop solves) */
+static double ocg_infeasibility(const struct ocg_data *d) {
+  const struct ocg_problem *p = d->p;
+  const struct ocg_solve *s = d->s;
+  double worst = 0.0, v;
+  int i;
+  for (i = 0; i < p->n_rows; ++i) {
+    v = fmax(s->lbg[i] - d->g[i], d->g[i] - s->ubg[i]);
+    if (v > worst) worst = v;
+  }
+  for (i = 0; i < p->nz; ++i) {
+    v = fmax(s->lbz[i] - d->x[i], d->x[i] - s->ubz[i]);
+    if (v > worst) worst = v;
+  }
+  return worst;
+}
+
+/* for the iteration callback: the infeasibility at d->x, its rows just evaluated into d->g
+ * (at each Jacobian: once an iterate; a copy of each trial point would cost more, measured) */
+static void ocg_remember_g(struct ocg_data *d) {
+  if (!d->s->iteration) return;
+  memcpy(d->xg, d->x, sizeof(double) * (size_t)d->p->nz);
+  d->infeasibility_at = ocg_infeasibility(d);
+  d->has_g = 1;
+}
+
 static fatrop_int ocg_full_constr_jac(const double *primal, const double *sp, const double *gp,
                                       struct blasfeo_dmat *BAbt, struct blasfeo_dmat *Ggt,
                                       struct blasfeo_dmat *Ggt_ineq,
@@ -139,6 +171,7 @@ static fatrop_int ocg_full_constr_jac(const double *primal, const double *sp, co
   out[0] = d->g; out[1] = d->a;
   n_out[0] = p->n_rows; n_out[1] = p->nnz_a;
   ocg_at(d, OCG_JAC_G, d->x, out, n_out, 2);
+  ocg_remember_g(d);
   for (i = 0; i < p->nnz_a; ++i) {
     switch (p->a_kind[i]) {
       case OCG_AB: d->AB[p->a_index[i]] = -d->a[i]; break;
@@ -207,7 +240,24 @@ static fatrop_int ocg_full_lag_hess(double scale, const double *primal, const do
   const double *in[4];
   double *out[2];
   int n_out[2], i, k, column;
+  const int one = 1;
+  double objective;
   ocg_read_primal(p, primal, d->x, s);
+  /* the Hessian is evaluated once an iteration, at its iterate: the iteration callback's turn
+   * (the objective evaluated there for it, and the rows: the last Jacobian's, else evaluated) */
+  k = d->calls[OCG_HESS_L];
+  if (d->s->iteration && d->s->stopped_at < 0) {
+    double *f = &objective;
+    ocg_at(d, OCG_F, d->x, &f, &one, 1);
+    if (!(d->has_g && memcmp(d->xg, d->x, sizeof(double) * (size_t)p->nz) == 0)) {
+      ocg_at(d, OCG_G, d->x, &d->g, &p->n_rows, 1);
+      ocg_remember_g(d);
+    }
+    if (d->s->iteration(k, objective, d->infeasibility_at)) {
+      fatrop_ocp_c_set_option_int(d->solver, "max_iter", k);
+      d->s->stopped_at = k;
+    }
+  }
   for (k = 0; k < s->K; ++k) {
     column = 0;
     for (i = d->a_ineq_idx[k]; i < d->a_ineq_idx[k + 1]; ++i)
@@ -405,6 +455,7 @@ struct ocg_context {
   struct ocg_data d;
   struct ocg_guard guard;
   struct FatropOcpCSolver *solver;
+  int capped;            /* a stop set the solver's max_iter below p->max_iter */
   int *split, *previous; /* the split's index arrays, this solve's and the solver's */
   int n_split;
   void *blocks;
@@ -435,7 +486,7 @@ struct ocg_context *ocg_context_new(const struct ocg_problem *p) {
   }
   d->p = p;
   c->n_split = 2 * p->n_rows + 2 * p->nz + 4 * (p->K + 2);
-  c->blocks = calloc((size_t)(p->nz + p->n_rows + p->nnz_a + p->nnz_h + n_max + p->n_ab +
+  c->blocks = calloc((size_t)(2 * p->nz + p->n_rows + p->nnz_a + p->nnz_h + n_max + p->n_ab +
                               p->n_cd + p->n_rsq + sz_w + 1), sizeof(double));
   d->arg = calloc((size_t)sz_arg + 4, sizeof(double *));
   d->res = calloc((size_t)sz_res + 2, sizeof(double *));
@@ -454,7 +505,8 @@ struct ocg_context *ocg_context_new(const struct ocg_problem *p) {
   d->AB = d->g + n_max;
   d->CD = d->AB + p->n_ab;
   d->RSQ = d->CD + p->n_cd;
-  d->w = d->RSQ + p->n_rsq;
+  d->xg = d->RSQ + p->n_rsq;
+  d->w = d->xg + p->nz;
   d->a_eq = c->split;
   d->a_ineq = d->a_eq + p->n_rows;
   d->x_eq = d->a_ineq + p->n_rows;
@@ -510,8 +562,15 @@ void ocg_fatrop_solve(struct ocg_context *c, struct ocg_solve *s) {
       return;
     }
     ocg_options(p, c->solver);
+    c->capped = 0;
     memcpy(c->previous, c->split, sizeof(int) * (size_t)c->n_split);
+  } else if (c->capped) {
+    fatrop_ocp_c_set_option_int(c->solver, "max_iter", p->max_iter);
+    c->capped = 0;
   }
+  d->solver = c->solver;
+  d->has_g = 0;
+  s->stopped_at = -1;
   memset(d->seconds, 0, sizeof d->seconds);
   memset(d->calls, 0, sizeof d->calls);
   s->left = OCG_LEFT_NONE;
@@ -540,6 +599,7 @@ void ocg_fatrop_solve(struct ocg_context *c, struct ocg_solve *s) {
   t0 = ocg_now();
   s->status = fatrop_ocp_c_solve(c->solver);
   s->solve_seconds = ocg_now() - t0;
+  c->capped = s->stopped_at >= 0;
   if (d->guard) {
     ocg_guard_disarm(d->guard);
     s->nans = d->guard->nans;

@@ -37,6 +37,7 @@ struct ocg_problem {
   const int *option_kinds;       /* 0 double, 1 int, 2 bool, 3 string */
   const double *option_values;
   const char **option_strings;
+  int max_iter;                  /* the max_iter among the options (restored after a stop) */
 };
 
 /* One solve's inputs and outputs. */
@@ -53,6 +54,11 @@ struct ocg_solve {
   int guarded, nan_limit, watch_sigint, left, nans;
   double limit, every;
   int (*check)(void);
+  /* fatrop's iteration callback, or NULL: asked at the start of iteration k (k done) with
+   * the objective and the infeasibility at the iterate; a nonzero answer stops fatrop at
+   * the end of that iteration (max_iter set to k; `stopped_at` = k, else -1) */
+  int (*iteration)(int k, double objective, double infeasibility);
+  int stopped_at;
 };
 
 /* What persists between solves (fatrop_ocp.c). */

@@ -52,6 +52,10 @@ _DOUBLE_P = ctypes.POINTER(ctypes.c_double)
 _EVAL = ctypes.c_void_p
 #: the caller's stop request, asked by a guarded solve (nonzero: stop)
 _CHECK = ctypes.CFUNCTYPE(ctypes.c_int)
+#: ``iteration(k, objective, infeasibility)`` of ``struct ocg_solve``: stop?
+_ITERATION = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_int, ctypes.c_double, ctypes.c_double)
+#: fatrop's own max_iter (ip_convergence_check.hpp), where the options set none
+FATROP_MAX_ITER = 1000
 #: the most inputs and outputs of an NLP Function (nlp_hess_l's, nlp_jac_g's)
 MAX_IN, MAX_OUT = 4, 2
 #: the arrays of one solve: its inputs, then its outputs (``x`` is the driver's ``z``)
@@ -75,7 +79,8 @@ class _Problem(ctypes.Structure):
                 ("buffer_n_in", (ctypes.c_int * MAX_IN) * len(NLP_FUNCTIONS)),
                 ("n_options", ctypes.c_int), ("option_names", ctypes.POINTER(ctypes.c_char_p)),
                 ("option_kinds", _INT_P), ("option_values", _DOUBLE_P),
-                ("option_strings", ctypes.POINTER(ctypes.c_char_p))]
+                ("option_strings", ctypes.POINTER(ctypes.c_char_p)),
+                ("max_iter", ctypes.c_int)]
 
 
 class _Solve(ctypes.Structure):
@@ -88,7 +93,8 @@ class _Solve(ctypes.Structure):
                 ("calls", ctypes.c_int * len(NLP_FUNCTIONS)), ("solve_seconds", ctypes.c_double),
                 ("guarded", ctypes.c_int), ("nan_limit", ctypes.c_int),
                 ("watch_sigint", ctypes.c_int), ("left", ctypes.c_int), ("nans", ctypes.c_int),
-                ("limit", ctypes.c_double), ("every", ctypes.c_double), ("check", _CHECK)]
+                ("limit", ctypes.c_double), ("every", ctypes.c_double), ("check", _CHECK),
+                ("iteration", _ITERATION), ("stopped_at", ctypes.c_int)]
 
 
 #: why a guarded solve was left (``ocg_solve.left``, fatrop_guard.h), as
@@ -400,6 +406,7 @@ class FatropOcp:
         p.option_names, p.option_strings = c_names, c_strings
         p.option_kinds = _ptr(kind_array, _INT_P)
         p.option_values = _ptr(values, _DOUBLE_P)
+        p.max_iter = int(options.get("max_iter", FATROP_MAX_ITER))
         #: what the C struct points into, kept alive with it
         self._keep = (arrays, kind_array, values, c_names, c_strings)
         self._problem = p
@@ -413,6 +420,9 @@ class FatropOcp:
         self._stop: Callable[[], bool] = never
         self._raised: list[BaseException] = []
         self._check = _CHECK(self._ask)
+        #: the listener of the solve under way, heard through :attr:`_iteration`
+        self._listener: Callable[[int, float, float], bool] | None = None
+        self._iteration = _ITERATION(self._hear)
         self._lock = threading.Lock()
         #: the non-finite evaluations of the last guarded solve
         self.nans = 0
@@ -435,6 +445,16 @@ class FatropOcp:
             self._raised.append(err)
             return 1
 
+    def _hear(self, k: int, objective: float, infeasibility: float) -> int:
+        """fatrop's iteration k, told to the listener of the solve under way: stop? (An
+        exception stops fatrop as well and is raised once it has returned.)"""
+        try:
+            return int(bool(self._listener is not None
+                            and self._listener(k, objective, infeasibility)))
+        except BaseException as err:  # noqa: BLE001  (raised again by solve)
+            self._raised.append(err)
+            return 1
+
     @property
     def times(self) -> SolveTimes | None:
         """The last solve's times (:class:`SolveTimes`), None before the first; read from
@@ -446,13 +466,19 @@ class FatropOcp:
                           dict(zip(NLP_FUNCTIONS, s.calls)))
 
     def solve(self, z0: Any, q: Any, lbg: Any, ubg: Any, lbz: Any, ubz: Any,
-              guard: Guard | None = None) -> tuple[dict[str, np.ndarray], int, int, int] | Stopped:
+              guard: Guard | None = None,
+              listener: Callable[[int, float, float], bool] | None = None
+              ) -> tuple[dict[str, np.ndarray], int, int, int, bool] | Stopped:
         """fatrop from z0 with parameters q and the stage form's bounds: the solution
         ``x, f, g, lam_g, lam_x`` (stage form, scaled as the Functions are), its
-        iterations, fatrop's return flag and its return value (0: converged). With a
-        ``guard`` (where :attr:`guardable`), :class:`~ocgroupoid.nlp.isolated.Stopped` when it
-        was left (:class:`Guard`), fatrop's solver abandoned; :class:`Unavailable` when the
-        guard's timer could not be created."""
+        iterations, fatrop's return flag, its return value (0: converged) and whether the
+        ``listener`` stopped it. ``listener(k, objective, infeasibility)`` hears the start of
+        each iteration k (k done; the objective and the largest violation of a bound at the
+        iterate, scaled as the Functions are) and stops fatrop by returning True: fatrop ends
+        that iteration with its step and stops (max_iter set to k: k + 1 iterations, the
+        last iterate kept). With a ``guard`` (where :attr:`guardable`),
+        :class:`~ocgroupoid.nlp.isolated.Stopped` when it was left (:class:`Guard`), fatrop's
+        solver abandoned; :class:`Unavailable` when the guard's timer could not be created."""
         with self._lock:  # one solve at a time: the driver's memory and solver are shared
             for array, value in zip(self._inputs, (z0, q, lbz, ubz, lbg, ubg)):
                 _fill(array, value)
@@ -464,10 +490,12 @@ class FatropOcp:
                 s.watch_sigint = threading.current_thread() is threading.main_thread()
                 s.check = self._check
                 self._stop = guard.stop
+            if listener is not None:
+                s.iteration, self._listener = self._iteration, listener
             try:
                 self._lib.ocg_fatrop_solve(self._context, ctypes.byref(s))
             finally:
-                self._stop = never
+                self._stop, self._listener = never, None
             raised, self._raised = self._raised, []
             self._last, self.nans = s, s.nans
             out = {name: v.copy() for name, v in self._outputs.items()}
@@ -479,4 +507,4 @@ class FatropOcp:
             return Stopped(LEFT[s.left])
         if s.bad_structure:
             raise NotStaged("a gap row's coefficient on x_{k+1} is not 1")
-        return out, s.iterations, s.return_flag, s.status
+        return out, s.iterations, s.return_flag, s.status, s.stopped_at >= 0

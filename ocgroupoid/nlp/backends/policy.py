@@ -5,7 +5,8 @@ stage's reduced Hessian positive definite and regularises until it is: slow or s
 some nonconvex problems) IPOPT from the same start with the time left; when it stalled near
 a solution (its acceptable stop), IPOPT from the point it reached, with its multipliers. A
 run that used up the time, or was interrupted, ends the turn: the next backend would have no
-time either.
+time either; so does a run its listener stopped (at a deadline, a Ctrl-C or a further
+start's budget, which would stop the next one as well).
 Between the two a rescue may run (:class:`~ocgroupoid.solve.CompiledProblem` gives order4
 one: order2 on the same grid, then fatrop again from its solution).
 """
@@ -17,8 +18,11 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from .base import ACCEPTABLE, INTERRUPTED, TIMED_OUT, Attempt, Backend, Run, Start
+from .base import ACCEPTABLE, INTERRUPTED, LISTENER_STOP, TIMED_OUT, Attempt, Backend, Run, Start
 
+#: what ends the turn: the time used up, an interrupt, the listener's stop (the same
+#: listener would stop the next backend)
+ENDS_TURN = (TIMED_OUT, INTERRUPTED, LISTENER_STOP)
 #: ``objective(x, p)``: the cost of a point, for a run stopped before it had one
 Objective = Callable[[np.ndarray, np.ndarray], float]
 #: ``rescue(start, failed)``: another way from the same start, tried after the first
@@ -48,7 +52,7 @@ def in_turn(backends: Sequence[Backend], start: Start, objective: Objective,
         names.insert(0, f"{backend.name} polish" if polish else backend.name)
         spent += run.seconds
         last = i == len(backends) - 1
-        stopped = run.status in (TIMED_OUT, INTERRUPTED)
+        stopped = run.status in ENDS_TURN
         polish = run.status == ACCEPTABLE
         if not (last or run.success or stopped or polish) and i == 0 and rescue is not None:
             rescued = rescue(start, run)
@@ -59,7 +63,7 @@ def in_turn(backends: Sequence[Backend], start: Start, objective: Objective,
                 polish = run.status == ACCEPTABLE
                 spent += run.seconds
                 names.insert(0, label)
-                stopped = run.status in (TIMED_OUT, INTERRUPTED)
+                stopped = run.status in ENDS_TURN
                 if run.success:
                     return replace(run, seconds=spent, earlier=tuple(earlier)), label
         if last or run.success or stopped:
