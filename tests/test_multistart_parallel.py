@@ -297,10 +297,11 @@ def _batch() -> parallel._Batch:
     return parallel._Batch((), np.zeros(0), time.monotonic() + 60, START_BUDGET, 1e9)
 
 
-def _first(iterations: int, seconds: float, success: bool = True) -> RawResult:
+def _first(iterations: int, seconds: float, success: bool = True,
+           earlier: tuple = ()) -> RawResult:
     return RawResult("first", np.zeros(1), np.zeros(0), np.zeros(0), 1.0,
                      "Solve_Succeeded" if success else "Infeasible_Problem_Detected", success,
-                     iterations, seconds, np.zeros(1))
+                     iterations, seconds, np.zeros(1), earlier=earlier)
 
 
 def test_the_budget_follows_the_first_start() -> None:
@@ -315,6 +316,17 @@ def test_the_budget_follows_the_first_start() -> None:
     assert parallel.budget_after(_first(34, 0.01), rule).seconds == 1.0  # the floor
     assert parallel.budget_after(_first(22, 0.55, success=False), rule) is None
     assert not budget.spent(65, 4.9) and budget.spent(66, 0.0) and budget.spent(1, 5.0)
+
+
+def test_the_budget_counts_every_run_of_the_first_start() -> None:
+    """A first start that fatrop brought near the minimum in 51 iterations and IPOPT polished
+    in 7 gives 3 x 58 iterations, at its seconds per iteration over the 58 (not 3 x 7 = 21,
+    raised to 30, which stopped every further start of ``quadrotor_min_time`` at N = 256)."""
+    rule = parallel.Rule(least=30, times=3, pace=3.0, least_seconds=1.0)
+    polished = _first(7, 2.58, earlier=(("fatrop", "Solved_To_Acceptable_Level", 51),))
+    budget = parallel.budget_after(polished, rule)
+    assert budget is not None and budget.iterations == 174
+    assert budget.seconds == pytest.approx(3.0 * 174 * 2.58 / 58)
 
 
 def test_a_further_start_in_a_worker_is_stopped_by_its_seconds() -> None:

@@ -137,12 +137,15 @@ class Budget:
 def budget_after(first: RawResult, rule: Rule) -> Budget | None:
     """A further start's budget once the first start has ended (no limit, None, when it
     failed): max(least, times x its iterations), and pace x its seconds per iteration over
-    them, at least least_seconds."""
+    them, at least least_seconds. Its iterations are those of all its runs (fatrop's before
+    IPOPT's polish: ``first.earlier``), as its seconds are; a further start's runs are each
+    held to the budget (the listener counts a run's iterations)."""
     if not first.success:
         return None
-    iterations = max(rule.least, rule.times * first.iterations)
+    done = first.iterations + sum(iterations for _, _, iterations in first.earlier)
+    iterations = max(rule.least, rule.times * done)
     return Budget(iterations, max(rule.least_seconds, rule.pace * iterations
-                                  * first.solve_seconds / max(first.iterations, 1)))
+                                  * first.solve_seconds / max(done, 1)))
 
 
 def budgeted(r: RawResult, deadline: float, stopped: bool) -> RawResult:
