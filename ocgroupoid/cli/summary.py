@@ -31,7 +31,9 @@ def summary(sol: Any) -> Table:
     t.add_row("solver time, this solution", f"{sol.solve_seconds * 1e3:.1f} ms ({sol.backend})")
     runs = [f"{sol.starts} starts" if sol.starts > 1 else "",
             "grids" if d.get("continuation") or "error_estimate" in d else "",
-            f"a rescue through {d['rescue']['scheme']}" if "rescue" in d else "",
+            "a rescue through " + " and ".join(
+                filter(None, [d["rescue"].get("scheme"), f"N={d['rescue']['grid']}"
+                              if "grid" in d["rescue"] else ""])) if "rescue" in d else "",
             "phases" if d.get("adaptive", {}).get("used") else ""]
     if sol.ipopt_seconds_total > sol.solve_seconds * (1 + 1e-9) or sol.starts > 1:
         t.add_row("solver time, every run", f"{sol.ipopt_seconds_total * 1e3:.1f} ms ("

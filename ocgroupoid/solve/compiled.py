@@ -8,7 +8,9 @@ first and interpolates each solution onto the next grid as its initial guess; it
 name cheaper schemes solved first on the final grid (``order2`` before ``order4``: a start
 far from the optimum converges in the cheap scheme, the costly one then takes a few steps).
 A final grid whose every start failed is rescued that way unasked; with fatrop the first
-start is, between fatrop's failure and IPOPT's fallback.
+start is, between fatrop's failure and IPOPT's fallback. If that fails too (or the scheme has
+no cheaper sibling), a grid a quarter as fine is solved first and the final grid continued
+from it, the coarse multipliers carried.
 """
 
 from __future__ import annotations
@@ -54,6 +56,11 @@ PROGRESS_EVERY = 0.25  # seconds between two reports of IPOPT's iterations
 RESCUE_ITERATIONS = 100
 #: the status of a run that reached its iteration limit
 MAX_ITER = "Maximum_Iterations_Exceeded"
+#: the grid rescue (:meth:`CompiledProblem._grid_rescue`) solves N / GRID_RESCUE first, where
+#: that is at least GRID_RESCUE_MIN intervals: quadrotor_min_time with order6 at N = 512 fails
+#: from its first guess (IPOPT's 500 iterations, 70 s), and so does its order2 rescue; N = 128
+#: solves from the same guess, and N = 512 from its solution in 25 iterations (4.2 s in all)
+GRID_RESCUE, GRID_RESCUE_MIN = 4, 16
 
 
 def _noop(_: str) -> None:
@@ -247,6 +254,13 @@ class CompiledProblem:
                     best = rescued or best
                 elif cheaper and through is not None and best.backend == through_label(cheaper):
                     rescue = _through_report(best, tr.disc.scheme, cheaper)
+                if len(plan) == 1 and not best.success and _rescuable(level) and \
+                        n // GRID_RESCUE >= GRID_RESCUE_MIN and not _whole_point(given) and \
+                        not interrupt.requested and time.monotonic() < deadline:
+                    rescued, rescue = self._grid_rescue(
+                        tr, p, starts[0], level[0], (params, initial, final, T), rescue,
+                        progress, interrupt, deadline)
+                    best = rescued or best
                 if i == 0:
                     results, multi = level, report
                 if scheme is None and same is not None and not interrupt.requested and \
@@ -359,6 +373,55 @@ class CompiledProblem:
         if not done:
             return None, report
         return replace(runs[1], label=f"{start.label}, through {other}"), report
+
+    def _grid_rescue(self, tr: Transcription, p: np.ndarray, start: Guess, failed: RawResult,
+                     pack: tuple[Any, ...], before: dict[str, Any] | None, progress: Progress,
+                     interrupt: Interrupt, deadline: float
+                     ) -> tuple[RawResult | None, dict[str, Any]]:
+        """Every start of the final grid failed, the first (``failed``) of itself, and the
+        scheme's rescue (``before``, its report) if it had one: solve N / :data:`GRID_RESCUE`
+        from the first ``start`` (interpolated onto it), then this grid from its solution with
+        its multipliers carried
+        (``continuation: [N / 4]`` after the fact: a crude start that the fine grid cannot
+        solve from, the coarse one may, and the fine grid then takes a few steps), from its
+        velocities alone if that fails. The rescued run if it succeeded, else None; and
+        ``diagnostics["rescue"]`` (``before``'s, extended)."""
+        coarse = self._at(tr.N // GRID_RESCUE)
+        runs: list[RawResult] = []
+        what = f"{tr.disc.scheme} on N={tr.N} failed from the start '{failed.label}' " \
+               f"({failed.status})"
+        for t in (coarse, tr):
+            q = p if t is tr else t.pack(*pack)
+            first = self._starts_of(t, q, (coarse, runs[0]), None, False)[0] if runs else \
+                interpolate(tr, tr.start_point(start, p)[0], p, coarse.N)
+            where = f"{what}, rescue: N={t.N}" + (f" from N={coarse.N}" if runs else "")
+            progress(where)
+            for g in [first, *([first.primal] if first.primal is not None else [])]:
+                listen, stop = parallel.watch(where, progress, interrupt, None, deadline,
+                                              PROGRESS_EVERY)
+                r = parallel.timed(t.solve(g, q, listen, deadline, stop), deadline)
+                self._spent += r.solve_seconds
+                if r.success or interrupt.requested or time.monotonic() > deadline:
+                    break
+            runs.append(r)
+            if not r.success or interrupt.requested or time.monotonic() > deadline:
+                break
+        done = len(runs) == 2 and runs[1].success
+        told = (("" if before is None else "then ") + ("solved" if done else "tried")
+                + f" N={coarse.N} first, then N={tr.N} from its solution: " + ", ".join(
+                    f"N={t.N} {r.status} in {r.iterations} iterations"
+                    for t, r in zip((coarse, tr), runs)))
+        report = {"message": f"{what}; {told}" if before is None else
+                  f"{before['message']}; {told}",
+                  "grid": coarse.N, "failed": failed.status, "rescued": done,
+                  "iterations": [*(before or {}).get("iterations", []),
+                                 *(r.iterations for r in runs)],
+                  "seconds": (before or {}).get("seconds", 0.0)
+                  + sum(r.solve_seconds for r in runs),
+                  **({"scheme": before["scheme"]} if before and "scheme" in before else {})}
+        if not done:
+            return None, report
+        return replace(runs[1], label=f"{failed.label}, through N={coarse.N}"), report
 
     def _through(self, tr: Transcription, name: str, pack: tuple[Any, ...]) -> Rescue:
         """The rescue of a start fatrop failed on (:func:`~ocgroupoid.nlp.backends.in_turn`,
