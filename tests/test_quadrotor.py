@@ -326,8 +326,31 @@ def test_a_solution_is_a_guess_on_another_grid_and_scheme() -> None:
     same = og.solve(pb, N=32, scheme="order4", guess=warm)  # the same NLP: its own point
     assert same.success and same.iterations < cold.iterations
     assert same.cost == pytest.approx(cold.cost, rel=1e-9)
-    with pytest.raises(ConfigError, match="shaped"):
-        og.solve(pb, N=16, guess=np.zeros((3, 6)))
+    with pytest.raises(ConfigError, match="shaped"):  # not velocities of this problem
+        og.solve(pb, N=16, guess=np.zeros((3, 5)))
+
+
+def test_velocities_of_another_grid_are_resampled() -> None:
+    """A Guess (or an array) of interval velocities made for the final grid starts the
+    coarse grid of a continuation too, resampled onto it: the same minimum as the velocities
+    given on the final grid alone; a wrong dim y is still an error."""
+    from ocgroupoid.solve.guesses import resampled
+
+    pb = quadrotor()
+    solver = og.compile_problem(pb, N=32, scheme="order4")
+    first = solver.guesses(solver.transcription, solver.transcription.pack(), False)[0]
+    alone = solver.solve(guess=first, multistart=False)
+    through = solver.solve(guess=first, multistart=False, continuation=[8])
+    assert alone.success and through.success
+    assert through.cost == pytest.approx(alone.cost, rel=1e-9)
+    coarse = og.solve(pb, N=8, scheme="order4", guess=first)
+    assert coarse.success and coarse.discretization["start"].endswith("(from N=32)")
+    line = np.linspace(0.0, 1.0, 4)[:, None] * np.ones((1, 6))
+    assert np.allclose(resampled(line, 8, 6)[:, 0], np.interp(
+        (np.arange(8) + 0.5) / 8, (np.arange(4) + 0.5) / 4, line[:, 0]))
+    assert resampled(line, 8, 5) is None and resampled(np.full((4, 6), np.nan), 8, 6) is None
+    with pytest.raises(ConfigError, match=r"or \(M, 6\) on another grid"):
+        og.solve(pb, N=8, guess=og.Guess("flat", np.zeros(6)))
 
 
 def test_continuation_reports_a_grid_that_lands_above_the_coarse_minimum(monkeypatch) -> None:

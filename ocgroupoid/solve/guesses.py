@@ -7,6 +7,7 @@ point (:attr:`~ocgroupoid.nlp.transcription.Transcription.point_function`).
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -82,15 +83,28 @@ def interpolate(coarse: Transcription, x: np.ndarray, p: np.ndarray, N: int) -> 
                  T=T)
 
 
+def resampled(xi: Any, N: int, dg: int) -> np.ndarray | None:
+    """Interval velocities of a grid of M intervals (M x dg, finite) on N intervals: linear in
+    the fraction of the horizon between the interval midpoints (constant beyond the first and
+    the last); None if ``xi`` is not such an array."""
+    xi = np.asarray(xi, dtype=float)
+    if xi.ndim != 2 or xi.shape[1] != dg or xi.shape[0] < 1 or not np.all(np.isfinite(xi)):
+        return None
+    given, wanted = (np.arange(xi.shape[0]) + 0.5) / xi.shape[0], (np.arange(N) + 0.5) / N
+    return np.column_stack([np.interp(wanted, given, xi[:, j]) for j in range(dg)])
+
+
 def as_guess(guess: Any, tr: Transcription, p: np.ndarray) -> Guess:
     """What ``solve(guess=...)`` accepts, as a Guess of this grid:
 
-    * a :class:`Guess` (interval velocities N x dim y, or a whole NLP point ``x``);
+    * a :class:`Guess` (interval velocities N x dim y, or a whole NLP point ``x``); velocities
+      of another grid (M x dim y: the final grid's, given with continuation) are resampled
+      linearly in the fraction of the horizon onto this grid's interval midpoints;
     * a :class:`Solution` of the same problem on any N or scheme: its velocities interpolated
       linearly in time onto this grid's interval midpoints (its own point as is when the
       NLP is the same; :meth:`CompiledProblem.solve` adds its multipliers where they carry
       over, :func:`~ocgroupoid.solve.multipliers.with_multipliers`);
-    * an array of interval velocities, N x dim y.
+    * an array of interval velocities, N x dim y (or M x dim y, resampled as a Guess's).
     """
     dg = tr.problem.groupoid.algebra_dim
     if isinstance(guess, Solution):
@@ -119,9 +133,13 @@ def as_guess(guess: Any, tr: Transcription, p: np.ndarray) -> Guess:
                      f"N={guess.N})", onto, T=guess.T)
     if isinstance(guess, Guess):
         if guess.x is None and np.shape(guess.xi) != (tr.N, dg):
-            raise ConfigError(f"guess {guess.label!r}: its velocities are shaped "
-                              f"{np.shape(guess.xi)}, this grid needs (N, dim y) = "
-                              f"({tr.N}, {dg})")
+            xi = resampled(guess.xi, tr.N, dg)
+            if xi is None:
+                raise ConfigError(f"guess {guess.label!r}: its velocities are shaped "
+                                  f"{np.shape(guess.xi)}, this grid needs (N, dim y) = "
+                                  f"({tr.N}, {dg}) (or (M, {dg}) on another grid of M "
+                                  "intervals, resampled)")
+            return replace(guess, label=f"{guess.label} (from N={len(guess.xi)})", xi=xi)
         if guess.x is not None and np.size(guess.x) != tr.nx:
             raise ConfigError(f"guess {guess.label!r}: its point has {np.size(guess.x)} "
                               f"variables, this NLP {tr.nx}: pass interval velocities, or a "
@@ -129,6 +147,9 @@ def as_guess(guess: Any, tr: Transcription, p: np.ndarray) -> Guess:
         return guess
     xi = np.asarray(guess, dtype=float) if isinstance(guess, (list, tuple, np.ndarray)) \
         else None
+    other = resampled(xi, tr.N, dg) if xi is not None and xi.shape != (tr.N, dg) else None
+    if xi is not None and other is not None:
+        return Guess(f"given velocities (from N={len(xi)})", other)
     if xi is None or xi.shape != (tr.N, dg) or not np.all(np.isfinite(xi)):
         raise ConfigError(f"guess: give an og.Guess, a Solution or finite interval velocities "
                           f"shaped (N, dim y) = ({tr.N}, {dg}), got {type(guess).__name__}"
