@@ -87,8 +87,11 @@ def test_fatrops_further_starts_are_stopped_by_their_iterations(monkeypatch, tmp
         return r
 
     monkeypatch.setattr(Transcription, "solve", spy)
-    sol = og.compile_problem(rigid_body(), N=16, workers=workers,
-                             backend="fatrop").solve(multistart=3)
+    try:
+        sol = og.compile_problem(rigid_body(), N=16, workers=workers,
+                                 backend="fatrop").solve(multistart=3)
+    finally:
+        parallel.close()  # the workers hold the spy: not for the next test
     rows = [line.split("\t") for line in record.read_text().splitlines()]
     first, *further = rows
     assert first[0] == "geodesic" and first[1] == "Solve_Succeeded"

@@ -381,11 +381,10 @@ class CompiledProblem:
         """Every start of the final grid failed, the first (``failed``) of itself, and the
         scheme's rescue (``before``, its report) if it had one: solve N / :data:`GRID_RESCUE`
         from the first ``start`` (interpolated onto it), then this grid from its solution with
-        its multipliers carried
-        (``continuation: [N / 4]`` after the fact: a crude start that the fine grid cannot
-        solve from, the coarse one may, and the fine grid then takes a few steps), from its
-        velocities alone if that fails. The rescued run if it succeeded, else None; and
-        ``diagnostics["rescue"]`` (``before``'s, extended)."""
+        its multipliers carried (``continuation: [N / 4]`` after the fact: a crude start that
+        the fine grid cannot solve from, the coarse one may, and the fine grid then takes a few
+        steps), from its velocities alone if that fails. The rescued run if it succeeded, else
+        None; and ``diagnostics["rescue"]`` (``before``'s, extended)."""
         coarse = self._at(tr.N // GRID_RESCUE)
         runs: list[RawResult] = []
         what = f"{tr.disc.scheme} on N={tr.N} failed from the start '{failed.label}' " \

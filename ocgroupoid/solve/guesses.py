@@ -136,9 +136,9 @@ def as_guess(guess: Any, tr: Transcription, p: np.ndarray) -> Guess:
             xi = resampled(guess.xi, tr.N, dg)
             if xi is None:
                 raise ConfigError(f"guess {guess.label!r}: its velocities are shaped "
-                                  f"{np.shape(guess.xi)}, this grid needs (N, dim y) = "
-                                  f"({tr.N}, {dg}) (or (M, {dg}) on another grid of M "
-                                  "intervals, resampled)")
+                                  f"{np.shape(guess.xi)}, this grid needs finite ones shaped "
+                                  f"(N, dim y) = ({tr.N}, {dg}) (or (M, {dg}) on another grid "
+                                  "of M intervals, resampled)")
             return replace(guess, label=f"{guess.label} (from N={len(guess.xi)})", xi=xi)
         if guess.x is not None and np.size(guess.x) != tr.nx:
             raise ConfigError(f"guess {guess.label!r}: its point has {np.size(guess.x)} "

@@ -455,7 +455,9 @@ class FatropBackend(Backend):
                 return solved
             r, iterations, flag, value, stopped = solved
             u = self.unscaled(r, a["p"])
-            status = LISTENER_STOP if stopped and flag == 1 else STATUS.get(flag, FAILED)
+            # asked to stop and not converged: the listener's stop, whatever fatrop then said
+            # (its iteration limit, or an acceptable point IPOPT would otherwise polish)
+            status = LISTENER_STOP if stopped and value != 0 else STATUS.get(flag, FAILED)
             return Run(u["x"], float(u["f"][0]), u["lam_g"], u["lam_x"], status, value == 0,
                        iterations, 0.0)
         r = self._whole(x0=x0, p=p)
