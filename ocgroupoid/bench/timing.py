@@ -43,7 +43,7 @@ from ..nlp.method import DEFAULT_STEPS
 from ..nlp.options import MAX_SECONDS
 from ..nlp.transcription import Guess, RawResult, Transcription
 from ..solve import CompiledProblem, Solution, compile_problem, distinct_minima, make_solution
-from ..solve.multipliers import onto
+from ..solve.multipliers import from_carried, onto
 from .methods import Method
 
 MIN_SECONDS = 0.25  # a solve faster than this is repeated until the repeats add up to it,
@@ -156,14 +156,12 @@ class Trial:
         deadline = time.monotonic() + self.tr.max_seconds  # both runs' time
         first = tr.solve(guess, p, deadline=deadline)
         start = onto(tr, first, self.tr, self.p) if first.success else self.guess
-        r = self.tr.solve(start, self.p, deadline=deadline)
-        earlier: tuple[Attempt, ...] = ((f"{first.backend} on N={tr.N}", first.status,
-                                         first.iterations),)
-        seconds = first.solve_seconds + r.solve_seconds
-        if not r.success and start.primal is not None:  # the carried warm start failed
-            earlier += ((f"{r.backend} with the multipliers", r.status, r.iterations),)
-            r = self.tr.solve(start.primal, self.p, deadline=deadline)
-            seconds += r.solve_seconds
+        *carried, r = from_carried(start, lambda g: self.tr.solve(g, self.p, deadline=deadline),
+                                   lambda r: r.success)
+        earlier: tuple[Attempt, ...] = (
+            (f"{first.backend} on N={tr.N}", first.status, first.iterations),
+            *((f"{c.backend} with the multipliers", c.status, c.iterations) for c in carried))
+        seconds = first.solve_seconds + sum(c.solve_seconds for c in (*carried, r))
         return replace(r, solve_seconds=seconds, earlier=(*earlier, *r.earlier))
 
     def timed(self) -> Timed:

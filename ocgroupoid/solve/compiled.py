@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, replace
+from functools import partial
 from typing import Any, Callable, Iterable, Sequence
 
 import numpy as np
@@ -38,7 +39,7 @@ from ..verify.verdict import REPLAY_TOLERANCE, scales
 from . import parallel
 from .guesses import as_guess, geodesic_guesses, interpolate, model_guesses, perturbed_guesses
 from .interrupt import Interrupt, interruptible
-from .multipliers import onto, with_multipliers
+from .multipliers import from_carried, onto, with_multipliers
 from .readout import control_ppoly, make_solution
 from .solution import Solution
 
@@ -389,19 +390,22 @@ class CompiledProblem:
         runs: list[RawResult] = []
         what = f"{tr.disc.scheme} on N={tr.N} failed from the start '{failed.label}' " \
                f"({failed.status})"
+
+        def solve(t: Transcription, q: np.ndarray, where: str, g: Guess) -> RawResult:
+            listen, stop = parallel.watch(where, progress, interrupt, None, deadline,
+                                          PROGRESS_EVERY)
+            r = parallel.timed(t.solve(g, q, listen, deadline, stop), deadline)
+            self._spent += r.solve_seconds
+            return r
+
         for t in (coarse, tr):
             q = p if t is tr else t.pack(*pack)
             first = self._starts_of(t, q, (coarse, runs[0]), None, False)[0] if runs else \
                 interpolate(tr, tr.start_point(start, p)[0], p, coarse.N)
             where = f"{what}, rescue: N={t.N}" + (f" from N={coarse.N}" if runs else "")
             progress(where)
-            for g in [first, *([first.primal] if first.primal is not None else [])]:
-                listen, stop = parallel.watch(where, progress, interrupt, None, deadline,
-                                              PROGRESS_EVERY)
-                r = parallel.timed(t.solve(g, q, listen, deadline, stop), deadline)
-                self._spent += r.solve_seconds
-                if r.success or interrupt.requested or time.monotonic() > deadline:
-                    break
+            r = from_carried(first, partial(solve, t, q, where), lambda r: r.success,
+                             lambda: not interrupt.requested and time.monotonic() <= deadline)[-1]
             runs.append(r)
             if not r.success or interrupt.requested or time.monotonic() > deadline:
                 break

@@ -32,7 +32,7 @@ their multipliers copied.
 
 from __future__ import annotations
 
-from typing import Protocol
+from typing import Callable, Protocol, TypeVar
 
 import numpy as np
 
@@ -40,6 +40,9 @@ from ..nlp.assembly import Kind
 from ..nlp.transcription import Guess, Transcription
 from .guesses import interpolate
 from .rows import Rows, times
+
+#: what a solve returns (a :class:`~ocgroupoid.nlp.transcription.RawResult`)
+R = TypeVar("R")
 
 #: the kinds of constraint blocks whose multipliers are carried; a block of another kind (the
 #: mesh of adaptive steps) leaves the finer grid without multipliers
@@ -114,3 +117,14 @@ def onto(coarse: Transcription, solved: Solved, fine: Transcription, p: np.ndarr
     which falls back to the interpolated velocities alone (``Guess.primal``) if it fails."""
     return with_multipliers(Rows.of(coarse), solved, fine, p,
                             interpolate(coarse, solved.x, solved.p, fine.N))
+
+
+def from_carried(start: Guess, solve: Callable[[Guess], R], succeeded: Callable[[R], bool],
+                 again: Callable[[], bool] = lambda: True) -> list[R]:
+    """The runs of ``solve`` from ``start`` (:func:`onto`'s): from the carried warm start,
+    and, if that did not succeed, ``again()`` allows it and the start has one, from its
+    velocities alone (``start.primal``); in order."""
+    runs = [solve(start)]
+    if not succeeded(runs[0]) and start.primal is not None and again():
+        runs.append(solve(start.primal))
+    return runs

@@ -51,7 +51,15 @@ from ..options import SolverOptions
 from ..stageform import NotStaged, StageForm, stage_form
 from ..watch import Listener
 from .base import ACCEPTABLE, INTERRUPTED, LISTENER_STOP, TIMED_OUT, Backend, Graph, Run, Start
-from .fatrop_ocp import BlockMaps, FatropOcp, Guard, Unavailable, block_maps, option_kinds
+from .fatrop_ocp import (
+    FATROP_MAX_ITER,
+    BlockMaps,
+    FatropOcp,
+    Guard,
+    Unavailable,
+    block_maps,
+    option_kinds,
+)
 from .ipopt import ipopt_options
 
 #: IPOPT options fatrop also has; the others do not apply to it
@@ -299,7 +307,7 @@ class FatropBackend(Backend):
         except ConfigError as err:
             raise ConfigError(f"fatrop's options (solver.fatrop and the IPOPT options fatrop "
                               f"shares, {', '.join(SHARED_OPTIONS)}): {err}") from None
-        self.max_iter = int(fatrop.get("max_iter", 3000))
+        self.max_iter = int(fatrop.get("max_iter", FATROP_MAX_ITER))
         #: the seconds after which a run counts as stuck (:data:`STUCK_SECONDS`)
         self.stuck_after = STUCK_FLOOR + STUCK_SECONDS * self.max_iter * nlp.nx
         self.jit_compiled = False
