@@ -9,6 +9,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from hypothesis import given, settings, strategies as st
 
 import ocgroupoid as og
 from ocgroupoid.errors import ConfigError
@@ -263,8 +264,9 @@ def test_a_start_that_fails_in_its_worker_is_reported(monkeypatch, tmp_path) -> 
 
 
 def test_a_further_start_waits_for_the_first_starts_budget() -> None:
-    """At the smallest budget a further start in a worker waits until the first start (the
-    solving process's) has set it, then stops where it would have in turn."""
+    """At the smallest budget a further start in a worker waits until the starts ahead of it
+    (here the solving process's first) have decided it, then stops where it would have in
+    turn; after a first start that failed it has no limit."""
     import threading
 
     shared = _as_a_worker_sees_it()
@@ -280,10 +282,83 @@ def test_a_further_start_waits_for_the_first_starts_budget() -> None:
     assert not further(30, 1.0, 0.0)  # waited for the first start
     assert time.perf_counter() - t0 >= waited[0] >= 0.15  # not counted as solver time
     assert not further(44, 1.0, 0.0) and further(45, 1.0, 0.0)
-    shared.budget.value = parallel._UNLIMITED
+    shared.budget.value, shared.lead.value = parallel._UNKNOWN, 1  # the first start failed
     assert not further(1000, 1.0, 0.0)
     shared.stop.set()
     assert further(1, 1.0, 0.0)
+
+
+def test_the_first_start_that_succeeds_sets_the_budget() -> None:
+    """Start k's budget is that of the first start before it that succeeded, none when all
+    before it failed, unknown while one ahead of that first success has not ended."""
+    rule = parallel.Rule(least=30, times=3, pace=3.0, least_seconds=1.0)
+    failed, solved = _first(500, 9.0, success=False), _first(22, 0.55)
+    assert parallel.budget_of({}, 0, rule) == (True, None)  # the first start: no limit
+    assert parallel.budget_of({}, 1, rule) == (False, None)
+    assert parallel.budget_of({0: failed}, 1, rule) == (True, None)
+    assert parallel.budget_of({0: failed}, 2, rule) == (False, None)
+    assert parallel.budget_of({0: failed, 2: solved}, 3, rule) == (False, None)
+    assert parallel.budget_of({0: failed, 1: solved}, 3, rule) == \
+        (True, parallel.budget_after(solved, rule))
+    assert parallel.budget_of({0: solved, 1: failed}, 2, rule) == \
+        (True, parallel.budget_after(solved, rule))
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.booleans(), min_size=1, max_size=7), st.randoms(use_true_random=False))
+def test_what_the_workers_read_is_the_budget_in_turn(outcomes: list[bool], rng) -> None:
+    """Whatever order the starts end in, what a worker reads of start k's budget from the
+    shared numbers (:meth:`_Shared.budget_of`) is, at every moment, what the starts ended so
+    far give in turn (:func:`budget_of`)."""
+    import multiprocessing
+
+    rule = parallel.Rule(least=30, times=3, pace=3.0, least_seconds=1.0)
+    shared = parallel._Shared.make(multiprocessing.get_context("fork"), 1)
+    order = list(range(len(outcomes)))
+    rng.shuffle(order)
+    ended: dict[int, RawResult] = {}
+    for i in [None, *order]:
+        if i is not None:
+            ended[i] = _first(10 + i, 0.1 * (i + 1), success=outcomes[i])
+            shared.publish(ended, rule)
+        for k in range(len(outcomes) + 1):
+            known, budget = parallel.budget_of(ended, k, rule)
+            seen = shared.budget_of(k)
+            assert seen[0] == known
+            if known:
+                assert (seen[1] is None) == (budget is None)
+                if budget is not None:
+                    assert seen[1].iterations == budget.iterations
+                    assert seen[1].seconds == pytest.approx(budget.seconds)
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_after_a_first_start_that_failed_the_next_success_sets_the_budget(
+        monkeypatch, workers: int) -> None:
+    """The first start fails (made to); the next one runs without a limit and succeeds, and
+    its budget (here none at all: 0 iterations) stops the starts after it, in turn and in
+    parallel. Before, no start after a failed first had a budget."""
+    from ocgroupoid.solve import compiled
+
+    monkeypatch.setattr(compiled, "START_BUDGET", parallel.Rule(least=0, times=0, pace=1e9,
+                                                                least_seconds=1e9))
+    solve = Transcription.solve
+
+    def first_fails(self, guess, *args, **kwargs):
+        r = solve(self, guess, *args, **kwargs)
+        return replace(r, success=False, status="Restoration_Failed") \
+            if guess.label == "geodesic" else r
+
+    parallel.close()  # the workers to fork inherit the patch
+    monkeypatch.setattr(Transcription, "solve", first_fails)
+    sol = og.compile_problem(rigid_body(), N=16, workers=workers).solve(multistart=2)
+    parallel.close()
+    ms = sol.diagnostics["multistart"]
+    assert ms["workers"] == workers and ms["finished"] == ms["starts"] == 4
+    labels = [m["label"] for m in sol.minima]
+    assert sol.success and sol.discretization["start"] not in ("geodesic", *ms["budget_spent"])
+    assert len(ms["budget_spent"]) == 2 and "geodesic" not in ms["budget_spent"]
+    assert set(ms["budget_spent"]).isdisjoint(labels)
 
 
 def _as_a_worker_sees_it():

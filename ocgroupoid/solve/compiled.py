@@ -46,8 +46,9 @@ from .solution import Solution
 Progress = Callable[[str], None]
 #: a further start of a multi-start gets max(30, 3 x the first start's) iterations, at no
 #: more than 3 times its seconds per iteration but at least 1 s in all
-#: (:class:`~ocgroupoid.solve.parallel.Rule`): one that needs far more is on its way to a
-#: worse minimum or nowhere (it is stopped, not counted)
+#: (:class:`~ocgroupoid.solve.parallel.Rule`; after a first start that failed, those of the
+#: first that succeeded, :func:`~ocgroupoid.solve.parallel.budget_of`): one that needs far
+#: more is on its way to a worse minimum or nowhere (it is stopped, not counted)
 START_BUDGET = parallel.Rule(least=30, times=3, pace=3.0, least_seconds=1.0)
 PROGRESS_EVERY = 0.25  # seconds between two reports of IPOPT's iterations
 #: the iterations each run of fatrop's rescue (:meth:`CompiledProblem._through`) has: the
@@ -355,8 +356,8 @@ class CompiledProblem:
             g = interpolate(via, runs[0].x, runs[0].p, t.N) if runs else start
             where = f"N={t.N}: {name} failed ({failed.status}), rescue: {t.disc.scheme}"
             progress(where)
-            listen, stop = parallel.watch(where, progress, interrupt, None, deadline,
-                                          PROGRESS_EVERY)
+            listen, stop = parallel.watch(where, progress, interrupt, parallel.fixed(None),
+                                          deadline, PROGRESS_EVERY)
             r = t.solve(g, q, listen, deadline, stop)
             runs.append(parallel.timed(r, deadline))
             self._spent += r.solve_seconds
@@ -392,8 +393,8 @@ class CompiledProblem:
                f"({failed.status})"
 
         def solve(t: Transcription, q: np.ndarray, where: str, g: Guess) -> RawResult:
-            listen, stop = parallel.watch(where, progress, interrupt, None, deadline,
-                                          PROGRESS_EVERY)
+            listen, stop = parallel.watch(where, progress, interrupt, parallel.fixed(None),
+                                          deadline, PROGRESS_EVERY)
             r = parallel.timed(t.solve(g, q, listen, deadline, stop), deadline)
             self._spent += r.solve_seconds
             return r
@@ -463,9 +464,10 @@ class CompiledProblem:
                 rescue: Rescue | None = None) -> tuple[list[RawResult], dict[str, Any]]:
         """The starts of one grid, in order, on worker processes (``options.workers``,
         :mod:`~ocgroupoid.solve.parallel`) or in turn, each after the first with
-        the budget :data:`START_BUDGET`; none started after Ctrl-C or the deadline. The
-        first, which has no budget, has ``rescue`` between fatrop's failure and IPOPT's
-        fallback (:meth:`_through`); the others' fallback is bounded by their budget. With
+        the budget :data:`START_BUDGET` (from the first start that succeeded before it); none
+        started after Ctrl-C or the deadline. The first, which has no budget, has ``rescue``
+        between fatrop's failure and IPOPT's fallback (:meth:`_through`); the others' fallback
+        is bounded by their budget, if they have one. With
         ``diagnostics["multistart"]``: the starts asked for and finished, the workers, the
         wall time of all, the sum of their solver times, the best start's, and the starts
         their budget stopped (status :data:`~ocgroupoid.solve.parallel.BUDGET_SPENT`)."""
@@ -481,19 +483,17 @@ class CompiledProblem:
                                          deadline, START_BUDGET, PROGRESS_EVERY, rescue)
         else:
             level = []
-            budget: parallel.Budget | None = None  # of a further start
             for i, g in enumerate(starts):
                 progress(where(i))
-                listen, stop = parallel.watch(where(i), progress, interrupt, budget, deadline,
-                                              PROGRESS_EVERY)
+                budget = parallel.budget_of(dict(enumerate(level)), i, START_BUDGET)[1]
+                listen, stop = parallel.watch(where(i), progress, interrupt,
+                                              parallel.fixed(budget), deadline, PROGRESS_EVERY)
                 r = tr.solve(g, p, listen, deadline, stop, rescue if i == 0 else None)
                 if i > 0:
                     r = parallel.budgeted(r, deadline, interrupt.requested)
                 level.append(parallel.timed(r, deadline))
                 if interrupt.requested or time.monotonic() > deadline:
                     break
-                if i == 0:
-                    budget = parallel.budget_after(level[0], START_BUDGET)
         spent = sum(r.solve_seconds for r in level)
         self._spent += spent
         best = min(level, key=lambda r: (not r.success, r.cost))

@@ -6,7 +6,7 @@
 
 **The solving process is one of the workers.** With ``workers`` w, w - 1 processes are forked
 and the solving process solves starts too: the first start (the one with the rescue of a
-fatrop grid, and the one whose iterations set the others' budget), then, like the forked
+fatrop grid, whose iterations set the others' budget if it succeeds), then, like the forked
 workers, the next start nobody has taken, until none is left (:meth:`_Shared.take`: a shared
 counter under a lock, so that whoever is free takes the next start, in their order). Between
 its iterations it reads what the workers sent, so their progress reaches the caller as it
@@ -42,11 +42,12 @@ after the fork (a Python hook's globals, a patched function) does not reach kept
 
 **The same result as one start after the other.** Starts are handed out in their order and
 reported in it, whatever order they finish in. The iteration budget of a further start
-(``START_BUDGET`` of :mod:`~ocgroupoid.solve.compiled`, a multiple of the first start's
-iterations) is kept exactly: a further start that reaches the smallest budget before the first
-start has finished waits for it, then goes on or stops at the same iteration as it would have
-in turn. So every start runs the same iterations from the same point, and the best start,
-the distinct minima and the verdict are the sequential path's. The one exception is a further
+(``START_BUDGET`` of :mod:`~ocgroupoid.solve.compiled`, a multiple of the iterations of the
+first start that succeeded before it, :func:`budget_of`) is kept exactly: a further start
+that reaches the smallest budget before the starts ahead of it have decided its budget waits
+for them, then goes on or stops at the same iteration as it would have in turn. So every
+start runs the same iterations from the same point, and the best start, the distinct minima
+and the verdict are the sequential path's. The one exception is a further
 start that crawls: its seconds are bounded too (:class:`Budget`), and where a clock stops a
 start depends on the machine's load, in turn as in parallel.
 
@@ -77,6 +78,7 @@ import threading
 import time
 import warnings
 from dataclasses import dataclass, replace
+from functools import partial
 from multiprocessing.connection import Connection, wait
 from typing import Any, Callable, Sequence
 
@@ -93,8 +95,8 @@ from .interrupt import Interrupt
 WORKER_FAILED = "Worker_Failed"
 #: the status of a further start stopped by its :class:`Budget`
 BUDGET_SPENT = "Start_Budget_Spent"
-#: a further start's budget before the first start has finished, and when it has none
-_UNKNOWN, _UNLIMITED = -2, -1
+#: the further starts' budget before a start has succeeded
+_UNKNOWN = -2
 #: no start (a worker that took none)
 _NONE = -1
 #: seconds between two looks at Ctrl-C, the deadline and the workers
@@ -134,8 +136,18 @@ class Budget:
         return iteration >= self.iterations or seconds >= self.seconds
 
 
+#: what a further start's budget is, asked at one of its iterations: (True, the budget) once
+#: the starts ahead of it have decided it (None: no limit), (False, None) until then
+Ask = Callable[[], "tuple[bool, Budget | None]"]
+
+
+def fixed(budget: Budget | None) -> Ask:
+    """The budget of a start that is known before it runs (None: no limit)."""
+    return lambda: (True, budget)
+
+
 def budget_after(first: RawResult, rule: Rule) -> Budget | None:
-    """A further start's budget once the first start has ended (no limit, None, when it
+    """The budget a start gives the starts after it once it has ended (no limit, None, when it
     failed): max(least, times x its iterations), and pace x its seconds per iteration over
     them, at least least_seconds. Its iterations are those of all its runs (fatrop's before
     IPOPT's polish: ``first.earlier``), as its seconds are; a further start's runs are each
@@ -146,6 +158,21 @@ def budget_after(first: RawResult, rule: Rule) -> Budget | None:
     iterations = max(rule.least, rule.times * done)
     return Budget(iterations, max(rule.least_seconds, rule.pace * iterations
                                   * first.solve_seconds / max(done, 1)))
+
+
+def budget_of(ended: dict[int, RawResult], k: int, rule: Rule) -> tuple[bool, Budget | None]:
+    """Start k's budget from the starts ``ended`` before it (by their number): that of the
+    first of them that succeeded (:func:`budget_after`), no limit when all of them failed,
+    unknown (False) while one ahead of that first success is still running. A first start
+    that failed says nothing of what a solve takes, so it sets no budget; the next one that
+    succeeds does (before, every start after a failed first ran without a limit: on a fine
+    grid, each to its iteration limit)."""
+    for j in range(k):
+        if j not in ended:
+            return False, None
+        if ended[j].success:
+            return True, budget_after(ended[j], rule)
+    return True, None
 
 
 def budgeted(r: RawResult, deadline: float, stopped: bool) -> RawResult:
@@ -200,13 +227,15 @@ def plan(workers: int | None, starts: int) -> tuple[int, str]:
 @dataclass(frozen=True)
 class _Shared:
     """What the solving process and its workers share: the stop event, the further starts'
-    budget (iterations and seconds), the next start to hand out and the start each worker
-    took (shared numbers; ``lock`` guards the handing out), and the solving process's pid (a
-    worker whose parent is gone ends)."""
+    budget (iterations and seconds, set by the first start that succeeded, number ``lead``;
+    before that ``lead`` counts the starts that failed from the first on), the next start to
+    hand out and the start each worker took (shared numbers; ``lock`` guards the handing out),
+    and the solving process's pid (a worker whose parent is gone ends)."""
 
     stop: Any
     budget: Any
     seconds: Any
+    lead: Any
     next: Any
     taken: Any
     lock: Any
@@ -216,18 +245,45 @@ class _Shared:
     def make(cls, ctx: Any, workers: int) -> _Shared:
         """For ``workers`` workers of this process, from the multiprocessing context ``ctx``."""
         return cls(ctx.Event(), ctx.RawValue("q", _UNKNOWN), ctx.RawValue("d", 0.0),
-                   ctx.RawValue("q", 1), ctx.RawArray("q", [_NONE] * workers), ctx.Lock(),
-                   os.getpid())
+                   ctx.RawValue("q", 0), ctx.RawValue("q", 1),
+                   ctx.RawArray("q", [_NONE] * workers), ctx.Lock(), os.getpid())
 
     def reset(self) -> None:
-        """Before a multi-start: no stop, the first start's budget unknown, the second start
-        the next to hand out (the first is the solving process's), none taken."""
+        """Before a multi-start: no stop, the further starts' budget unknown, the second
+        start the next to hand out (the first is the solving process's), none taken."""
         self.stop.clear()
         self.seconds.value = 0.0
         self.budget.value = _UNKNOWN
+        self.lead.value = 0
         self.next.value = 1
         for w in range(len(self.taken)):
             self.taken[w] = _NONE
+
+    def publish(self, ended: dict[int, RawResult], rule: Rule) -> None:
+        """What the starts ``ended`` (by their number) decide of the budget, for the workers
+        (:meth:`budget_of`): the failed starts from the first on (``lead``), then the budget
+        of the first that succeeded. ``lead`` is written before the budget, which a worker
+        reads first: once it sees the budget, ``lead`` is final."""
+        if self.budget.value != _UNKNOWN:
+            return
+        lead = self.lead.value
+        while lead in ended and not ended[lead].success:
+            lead += 1
+        self.lead.value = lead
+        if lead in ended:
+            budget = budget_after(ended[lead], rule)
+            assert budget is not None
+            self.seconds.value = budget.seconds
+            self.budget.value = budget.iterations
+
+    def budget_of(self, k: int) -> tuple[bool, Budget | None]:
+        """Start k's budget as :func:`budget_of` gives it, from what the solving process
+        published (:meth:`publish`)."""
+        iterations = self.budget.value
+        lead = self.lead.value
+        if iterations != _UNKNOWN:
+            return True, Budget(iterations, self.seconds.value) if k > lead else None
+        return lead >= k, None
 
     def take(self, total: int, deadline: float, w: int | None) -> int | None:
         """The next of ``total`` starts, handed out (to worker ``w``, None: the solving
@@ -256,16 +312,45 @@ class _Batch:
     every: float
 
 
-def _over(shared: _Shared, began: float, waited: list[float]) -> Callable[[], bool]:
-    """Whether a further start's fatrop run in a worker should stop, asked by its guard or
+def _spent(ask: Ask, iteration: int, began: float, least: int, halted: Callable[[], bool],
+           pause: Callable[[], None], waited: list[float]) -> bool:
+    """Whether a further start at ``iteration``, begun at ``began`` (``time.perf_counter()``),
+    has used its budget (``ask``), waiting at the smallest budget (``least`` iterations) while
+    the starts ahead of it have not decided it: ``pause()`` between two asks, True at once
+    once ``halted()``. The seconds waited are added to ``waited[0]``: they are not the start's
+    solver time, which its budget's seconds count."""
+    known, budget = ask()
+    if not known:
+        if iteration < least:
+            return False
+        t0 = time.perf_counter()
+        try:
+            while not known:
+                pause()
+                if halted():
+                    return True
+                known, budget = ask()
+        finally:
+            waited[0] += time.perf_counter() - t0
+    return budget is not None and \
+        budget.spent(iteration, time.perf_counter() - began - waited[0])
+
+
+def _out_of_seconds(ask: Ask, began: float, waited: list[float]) -> bool:
+    """Whether a start has spent the seconds of its budget (``ask``), once known, the seconds
+    it waited at the smallest budget not counted."""
+    known, budget = ask()
+    return known and budget is not None and \
+        time.perf_counter() - began - waited[0] >= budget.seconds
+
+
+def _over(shared: _Shared, i: int, began: float, waited: list[float]) -> Callable[[], bool]:
+    """Whether further start i's fatrop run in a worker should stop, asked by its guard or
     its helper (where fatrop hears no listener): the stop event, or the seconds of its budget
     spent (the seconds it waited at the smallest budget not counted)."""
     def over() -> bool:
-        if shared.stop.is_set():
-            return True
-        if shared.budget.value in (_UNKNOWN, _UNLIMITED):
-            return False
-        return time.perf_counter() - began - waited[0] >= shared.seconds.value
+        return shared.stop.is_set() or \
+            _out_of_seconds(lambda: shared.budget_of(i), began, waited)
 
     return over
 
@@ -274,8 +359,8 @@ def _listener(conn: Connection, i: int, batch: _Batch, shared: _Shared,
               waited: list[float]) -> Listener:
     """The iteration callback of further start i in a worker: progress to the solving process
     at most every ``batch.every`` seconds; stop on the stop event, past the deadline, or at
-    its budget, waiting at the smallest budget until the first start has set it (the seconds
-    waited added to ``waited[0]``: not the start's solver time)."""
+    its budget, waiting at the smallest budget until the starts ahead of it have decided it
+    (:func:`_spent`; the seconds waited added to ``waited[0]``)."""
     deadline, rule = batch.deadline, batch.rule
     last = [time.perf_counter()]
     began = last[0]
@@ -289,56 +374,51 @@ def _listener(conn: Connection, i: int, batch: _Batch, shared: _Shared,
         if now - last[0] >= batch.every:
             last[0] = now
             conn.send(("progress", i, (iteration, objective, infeasibility)))
-        if stopped():
-            return True
-        if shared.budget.value == _UNKNOWN:  # the first start is still running
-            if iteration < rule.least:
-                return False
-            t0 = time.perf_counter()
-            try:
-                while shared.budget.value == _UNKNOWN:
-                    time.sleep(POLL / 10)
-                    if stopped():
-                        return True
-            finally:
-                waited[0] += time.perf_counter() - t0
-        if shared.budget.value == _UNLIMITED:
-            return False
-        return Budget(shared.budget.value, shared.seconds.value).spent(
-            iteration, time.perf_counter() - began - waited[0])
+        return stopped() or _spent(lambda: shared.budget_of(i), iteration, began, rule.least,
+                                   stopped, lambda: time.sleep(POLL / 10), waited)
 
     return listen
 
 
 def watch(where: str, progress: Callable[[str], None], interrupt: Interrupt,
-          budget: Budget | None, deadline: float, every: float,
-          look: Callable[[], None] | None = None
-          ) -> tuple[Listener, Callable[[], bool]]:
+          budget: Ask, deadline: float, every: float,
+          look: Callable[[float], None] | None = None, least: int = 0,
+          waited: list[float] | None = None) -> tuple[Listener, Callable[[], bool]]:
     """A start solved in the solving process: IPOPT's iteration callback, which reports
     (iteration, objective, infeasibility) to ``progress`` at most every ``every`` seconds and
-    stops once Ctrl-C was pressed, past ``deadline`` (``time.monotonic()``) or once ``budget``
-    (iterations or seconds from now) is spent (fatrop hears it too, through its own interface:
-    :meth:`~ocgroupoid.nlp.backends.fatrop_ocp.FatropOcp.solve`); and fatrop's ``stop()``,
-    asked by its guard or its helper (which hears no listener): Ctrl-C, or the budget's
-    seconds. Both call ``look()`` first, which reads what the workers sent meanwhile."""
+    stops once Ctrl-C was pressed, past ``deadline`` (``time.monotonic()``) or once its
+    ``budget`` (iterations or seconds from now) is spent (fatrop hears it too, through its own
+    interface: :meth:`~ocgroupoid.nlp.backends.fatrop_ocp.FatropOcp.solve`); and fatrop's
+    ``stop()``, asked by its guard or its helper (which hears no listener): Ctrl-C, or the
+    budget's seconds. Both call ``look()`` first, which reads what the workers sent
+    meanwhile. A budget not yet decided (a start ahead of this one still runs in a worker) is
+    waited for at ``least`` iterations, reading the workers (``look(POLL)``), the seconds
+    waited added to ``waited[0]``."""
     last = [time.perf_counter()]
     began = last[0]
+    waited = [0.0] if waited is None else waited
+
+    def halted() -> bool:
+        return interrupt.requested or time.monotonic() > deadline
+
+    def pause() -> None:
+        if look is not None:
+            look(POLL)
+        time.sleep(POLL / 10)  # the workers that decide it may be between two words
 
     def listen(iteration: int, objective: float, infeasibility: float) -> bool:
         if look is not None:
-            look()
+            look(0.0)
         now = time.perf_counter()
         if now - last[0] >= every:
             last[0] = now
             progress(iteration_line(where, iteration, objective, infeasibility))
-        return interrupt.requested or time.monotonic() > deadline or \
-            (budget is not None and budget.spent(iteration, now - began))
+        return halted() or _spent(budget, iteration, began, least, halted, pause, waited)
 
     def stop() -> bool:
         if look is not None:
-            look()
-        return interrupt.requested or \
-            (budget is not None and time.perf_counter() - began >= budget.seconds)
+            look(0.0)
+        return interrupt.requested or _out_of_seconds(budget, began, waited)
 
     return listen, stop
 
@@ -362,7 +442,7 @@ def _serve(conn: Connection, w: int, tr: Transcription, shared: _Shared) -> None
             try:
                 r = tr.solve(batch.starts[i], batch.p,
                              _listener(conn, i, batch, shared, waited), batch.deadline,
-                             _over(shared, time.perf_counter(), waited))
+                             _over(shared, i, time.perf_counter(), waited))
                 r = budgeted(r, batch.deadline, shared.stop.is_set())
                 conn.send(("done", i, replace(r, solve_seconds=r.solve_seconds - waited[0])))
             except Exception as err:  # noqa: BLE001  (reported as a failed start)
@@ -518,11 +598,13 @@ def run(tr: Transcription, starts: Sequence[Guess], p: np.ndarray, workers: int,
 
     def fail(i: int, why: str) -> None:
         results[i] = _failed(tr, starts[i], p, why)
+        shared.publish(results, rule)
         failed.append({"start": i + 1, "label": starts[i].label, "error": why})
         progress(f"{where(i)}: failed in its worker ({why})")
 
     def done(i: int, r: RawResult) -> None:
         results[i] = timed(r, deadline)
+        shared.publish(results, rule)
         progress(f"{len(results)}/{len(starts)} starts done; {where(i)}: {r.status}")
 
     def look(seconds: float = 0.0) -> None:
@@ -538,15 +620,15 @@ def run(tr: Transcription, starts: Sequence[Guess], p: np.ndarray, workers: int,
     clean = False
     try:
         i: int | None = 0
-        budget: Budget | None = None  # of a further start
         while i is not None:
             progress(where(i))
-            listen, stop = watch(where(i), progress, interrupt, budget, deadline, every, look)
+            waited = [0.0]
+            listen, stop = watch(where(i), progress, interrupt,
+                                 partial(budget_of, results, i, rule), deadline, every, look,
+                                 rule.least, waited)
             r = tr.solve(starts[i], p, listen, deadline, stop, rescue if i == 0 else None)
+            r = replace(r, solve_seconds=r.solve_seconds - waited[0])
             done(i, budgeted(r, deadline, interrupt.requested) if i > 0 else r)
-            if i == 0:
-                _settle(shared, rule, results[0])
-                budget = budget_after(results[0], rule)
             if interrupt.requested or time.monotonic() > deadline:
                 shared.stop.set()
             i = shared.take(len(starts), deadline, None)
@@ -593,12 +675,3 @@ def _receive(w: int, conn: Connection, proc: Any, shared: _Shared, busy: set[int
             code = proc.exitcode
             fail(i, "its worker process died (" + (f"signal {-code}" if code is not None and
                                                    code < 0 else f"exit code {code}") + ")")
-
-
-def _settle(shared: _Shared, rule: Rule, first: RawResult) -> None:
-    """Once the first start has ended: the further starts' budget (:func:`budget_after`;
-    none when it failed), as in turn."""
-    budget = budget_after(first, rule)
-    if budget is not None:
-        shared.seconds.value = budget.seconds  # before the iterations, which workers poll
-    shared.budget.value = _UNLIMITED if budget is None else budget.iterations
