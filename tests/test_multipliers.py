@@ -7,6 +7,7 @@ start is solved again without them."""
 from __future__ import annotations
 
 import pickle
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -148,8 +149,10 @@ def test_a_solution_given_as_the_guess_of_another_grid_brings_its_multipliers(so
     """``solve(guess=solution)`` on a finer grid starts from the solution's multipliers too
     (the Solution keeps its NLP's rows), lands on the minimum the direct solve finds, and
     takes fewer iterations than from the same velocities alone (measured N = 16 to 32: 24
-    against 27; 128 to 512: 18 against 413); a solution read from its file carries no rows
-    and starts from its velocities."""
+    against 27; 128 to 512: 18 against 413). A solution read from its file carries no rows:
+    the solve takes them from its own grid of the file's N (the same problem, scheme,
+    retraction and rule) and starts exactly as from the solution itself; from a file of
+    another method, from its velocities alone."""
     sc = solved[16][1]
     assert sc.rows is not None and sc.rows.N == 16 and sc.rows.ng == sc.lam_g.size
     fine = compiled(32)
@@ -158,15 +161,20 @@ def test_a_solution_given_as_the_guess_of_another_grid_brings_its_multipliers(so
         "with its multipliers"
     read = og.Solution.from_json(sc.to_json())
     assert read.rows is None
-    cold = fine.solve(multistart=False, guess=read)
+    again = fine.solve(multistart=False, guess=read)
+    assert again.discretization["start"] == warm.discretization["start"]
+    assert again.iterations == warm.iterations and again.cost == pytest.approx(warm.cost,
+                                                                               rel=1e-12)
+    other = replace(read, discretization={**read.discretization, "rule": "trapezoidal"})
+    cold = fine.solve(multistart=False, guess=other)
     assert cold.discretization["start"] == "interpolated from a solution (order4, N=16)"
     assert warm.success and cold.success
     assert warm.cost == pytest.approx(solved[32][1].cost, rel=1e-9)
     assert cold.cost == pytest.approx(warm.cost, rel=1e-9)
     assert warm.iterations < cold.iterations, (warm.iterations, cold.iterations)
-    again = pickle.loads(pickle.dumps(sc))  # a sweep's worker sends its solutions back
-    assert again.rows is not None and carried(again.rows, again.lam_g, again.lam_x,
-                                              Rows.of(solved[32][0])) is not None
+    kept = pickle.loads(pickle.dumps(sc))  # a sweep's worker sends its solutions back
+    assert kept.rows is not None and carried(kept.rows, kept.lam_g, kept.lam_x,
+                                             Rows.of(solved[32][0])) is not None
 
 
 def test_a_solution_of_another_problem_as_the_guess_is_a_clear_error(solved) -> None:

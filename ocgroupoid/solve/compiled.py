@@ -41,6 +41,7 @@ from .guesses import as_guess, geodesic_guesses, interpolate, model_guesses, per
 from .interrupt import Interrupt, interruptible
 from .multipliers import from_carried, onto, with_multipliers
 from .readout import control_ppoly, make_solution
+from .rows import Rows
 from .solution import Solution
 
 Progress = Callable[[str], None]
@@ -336,10 +337,29 @@ class CompiledProblem:
                     given.x is not None and given.x.size != tr.nx:  # a rescue's scheme
                 given = given.primal
             start = as_guess(given, tr, p)
-            if isinstance(given, Solution) and given.rows is not None and start.x is None:
-                start = with_multipliers(given.rows, given, tr, p, start)  # another grid's
+            rows = self._rows_of(given) if isinstance(given, Solution) else None
+            if rows is not None and start.x is None:
+                start = with_multipliers(rows, given, tr, p, start)  # another grid's
             return [start]
         return self.guesses(tr, p, multistart)
+
+    def _rows_of(self, sol: Solution) -> Rows | None:
+        """The constraint rows ``sol``'s multipliers are laid out in: its own, or, for a
+        Solution read from a file (which keeps none), those of this problem's grid of its N,
+        where it was solved on one like it: the same problem (by name), scheme, retraction
+        and rule, uniform steps, and a point and multipliers of that grid's sizes. None
+        otherwise (its velocities alone start the solve)."""
+        if sol.rows is not None:
+            return sol.rows
+        d = sol.discretization
+        if sol.problem != self.problem.name or sol.lam_g.size == 0 or sol.N < 1 or \
+                d.get("steps", "uniform") != "uniform" or \
+                (d.get("scheme"), d.get("retraction"), d.get("rule")) != \
+                (self.disc.scheme, self.transcription.scheme.retraction, self.disc.rule):
+            return None
+        rows = Rows.of(self._at(sol.N))
+        return rows if (rows.nx, rows.ng) == (sol.x.size, sol.lam_g.size) and \
+            sol.lam_x.size == rows.nx else None
 
     def _rescue(self, tr: Transcription, p: np.ndarray, via: Transcription, pv: np.ndarray,
                 start: Guess, failed: RawResult, progress: Progress, interrupt: Interrupt,

@@ -95,7 +95,8 @@ class Solution:
     backend: str = "ipopt"
     #: the constraint rows of the NLP it was solved on, so that ``solve(guess=solution)`` on
     #: another grid carries its multipliers over (:mod:`~ocgroupoid.solve.multipliers`);
-    #: None when read from a file
+    #: None when read from a file (the solve then takes those of its own grid of this N, when
+    #: the file's problem and method are its own)
     rows: Rows | None = field(default=None, repr=False, compare=False)
 
     def __repr__(self) -> str:
