@@ -140,7 +140,9 @@ def tightened(bounds: ca.Function, sf: StageForm) -> ca.Function:
     (:data:`BOUND_RELAX`, in the scaled units fatrop relaxes in); equalities (lb = ub) and
     infinite bounds as they are, and bounds closer than the two moves meet at their
     midpoint."""
-    p, s = ca.SX.sym("p", bounds.size1_in(0)), ca.SX.sym("s", sf.order.size)
+    # built as whole-vector MX operations and then expanded: the same SX graph (bit-identical
+    # bounds, as fast a call) built in 40 ms at N = 1024 where the SX expressions took 67 ms
+    p, s = ca.MX.sym("p", bounds.size1_in(0)), ca.MX.sym("s", sf.order.size)
     lbg, ubg, lbx, ubx = bounds(p)
     staged = [s * sf.rows_z(lbg), s * sf.rows_z(ubg), *sf.bounds_z(lbx, ubx)]
     out = []
@@ -153,7 +155,8 @@ def tightened(bounds: ca.Function, sf: StageForm) -> ca.Function:
         moved = lb < ub
         out.append(ca.if_else(moved * finite_lo, ca.if_else(cross, mid, lo), lb))
         out.append(ca.if_else(moved * finite_up, ca.if_else(cross, mid, up), ub))
-    return ca.Function("fatrop_bounds", [p, s], out, ["p", "s"], ["lbg", "ubg", "lbx", "ubx"])
+    return ca.Function("fatrop_bounds", [p, s], out, ["p", "s"],
+                       ["lbg", "ubg", "lbx", "ubx"]).expand()
 
 
 def row_scales(options: dict[str, Any]) -> tuple[float, float] | None:
