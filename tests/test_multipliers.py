@@ -152,7 +152,8 @@ def test_a_solution_given_as_the_guess_of_another_grid_brings_its_multipliers(so
     against 27; 128 to 512: 18 against 413). A solution read from its file carries no rows:
     the solve takes them from its own grid of the file's N (the same problem, scheme,
     retraction and rule) and starts exactly as from the solution itself; from a file of
-    another method, from its velocities alone."""
+    another method, or with a multiplier it could not read (null), from its velocities
+    alone."""
     sc = solved[16][1]
     assert sc.rows is not None and sc.rows.N == 16 and sc.rows.ng == sc.lam_g.size
     fine = compiled(32)
@@ -168,6 +169,8 @@ def test_a_solution_given_as_the_guess_of_another_grid_brings_its_multipliers(so
     other = replace(read, discretization={**read.discretization, "rule": "trapezoidal"})
     cold = fine.solve(multistart=False, guess=other)
     assert cold.discretization["start"] == "interpolated from a solution (order4, N=16)"
+    damaged = replace(read, lam_g=np.where(np.arange(read.lam_g.size) == 3, np.nan, read.lam_g))
+    assert fine._rows_of(damaged) is None and fine._rows_of(read) is not None  # (a null)
     assert warm.success and cold.success
     assert warm.cost == pytest.approx(solved[32][1].cost, rel=1e-9)
     assert cold.cost == pytest.approx(warm.cost, rel=1e-9)

@@ -347,12 +347,13 @@ class CompiledProblem:
         """The constraint rows ``sol``'s multipliers are laid out in: its own, or, for a
         Solution read from a file (which keeps none), those of this problem's grid of its N,
         where it was solved on one like it: the same problem (by name), scheme, retraction
-        and rule, uniform steps, and a point and multipliers of that grid's sizes. None
+        and rule, uniform steps, and a point and finite multipliers of that grid's sizes. None
         otherwise (its velocities alone start the solve)."""
         if sol.rows is not None:
             return sol.rows
         d = sol.discretization
         if sol.problem != self.problem.name or sol.lam_g.size == 0 or sol.N < 1 or \
+                not (np.isfinite(sol.lam_g).all() and np.isfinite(sol.lam_x).all()) or \
                 d.get("steps", "uniform") != "uniform" or \
                 (d.get("scheme"), d.get("retraction"), d.get("rule")) != \
                 (self.disc.scheme, self.transcription.scheme.retraction, self.disc.rule):
