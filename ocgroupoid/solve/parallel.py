@@ -146,6 +146,23 @@ def fixed(budget: Budget | None) -> Ask:
     return lambda: (True, budget)
 
 
+def settled(ask: Ask) -> Ask:
+    """``ask``, asked no more once it has answered (a decided budget does not change within
+    a multi-start): the solving process's iteration callback asks at every iteration, and
+    its ask scans the starts ended before. (A worker reads two shared numbers instead.)"""
+    known: list[Budget | None] = []
+
+    def asked() -> tuple[bool, Budget | None]:
+        if known:
+            return True, known[0]
+        decided, budget = ask()
+        if decided:
+            known.append(budget)
+        return decided, budget
+
+    return asked
+
+
 def budget_after(first: RawResult, rule: Rule) -> Budget | None:
     """The budget a start gives the starts after it once it has ended (no limit, None, when it
     failed): max(least, times x its iterations), and pace x its seconds per iteration over
@@ -397,6 +414,7 @@ def watch(where: str, progress: Callable[[str], None], interrupt: Interrupt,
     last = [time.perf_counter()]
     began = last[0]
     waited = [0.0] if waited is None else waited
+    budget = settled(budget)
 
     def halted() -> bool:
         return interrupt.requested or time.monotonic() > deadline
